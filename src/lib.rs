@@ -1,0 +1,18 @@
+//! `dpm`: diffusion based photon mapping (Schjøth, Olsen, Sparring) on Embree 3.
+//!
+//! The crate reads top to bottom as the data flows:
+//! scene description → Embree → photon tracing → photon map → radiance estimate → render → image.
+//! Each stage is one module; each module's opening paragraph says what it owns and what it
+//! must not touch.
+
+pub mod embree;
+pub mod scene;
+pub mod sampling;
+pub mod optics;
+pub mod world;
+pub mod photon;
+pub mod estimate;
+pub mod render;
+pub mod density;
+pub mod image_io;
+pub mod timing;

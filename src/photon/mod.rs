@@ -1,0 +1,11 @@
+//! Photons: the compact record ([`record`]), the pure-Rust kd-tree ([`kdtree`]) and the photon
+//! map that pairs them ([`map`]). Photon *tracing* lives in [`tracer`]; nothing here calls
+//! Embree except through [`crate::world`].
+
+pub mod kdtree;
+pub mod map;
+pub mod record;
+
+pub use kdtree::{KdTree, Neighbours};
+pub use map::PhotonMap;
+pub use record::Photon;

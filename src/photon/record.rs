@@ -1,0 +1,147 @@
+//! The stored photon: 20 bytes (position 12, power 4 as shared-exponent RGB, incoming
+//! direction 2 and surface normal 2 as 8-bit octahedral pairs). Owns the packing and nothing
+//! else; it knows neither the kd-tree nor any estimate.
+
+use glam::Vec3;
+
+/// One photon hit on a diffuse surface.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct Photon {
+    position: [u32; 3],
+    power: [u8; 4],
+    direction: [u8; 2],
+    normal: [u8; 2],
+}
+
+impl Photon {
+    /// `direction` is the direction of travel when the photon arrived (pointing into the surface);
+    /// `normal` the surface normal on the side the photon arrived from.
+    pub fn new(position: Vec3, power: Vec3, direction: Vec3, normal: Vec3) -> Self {
+        Self {
+            position: position.to_array().map(f32::to_bits),
+            power: encode_rgbe(power),
+            direction: encode_octahedral(direction),
+            normal: encode_octahedral(normal),
+        }
+    }
+
+    pub fn position(&self) -> Vec3 {
+        Vec3::from_array(self.position.map(f32::from_bits))
+    }
+
+    /// Power (flux) in watts per colour channel.
+    pub fn power(&self) -> Vec3 {
+        decode_rgbe(self.power)
+    }
+
+    pub fn direction(&self) -> Vec3 {
+        decode_octahedral(self.direction)
+    }
+
+    pub fn normal(&self) -> Vec3 {
+        decode_octahedral(self.normal)
+    }
+}
+
+/// Shared-exponent RGB (Ward's RGBE), rounded to nearest: relative error of the largest
+/// channel is at most 1/512, and the range covers 1e-38..1e38 so extreme light powers survive.
+pub fn encode_rgbe(c: Vec3) -> [u8; 4] {
+    let c = c.max(Vec3::ZERO);
+    let m = c.max_element();
+    if !(m > 1e-38) || !m.is_finite() {
+        return [0; 4];
+    }
+    // m = f * 2^e with f in [0.5, 1)
+    let mut e = m.log2().floor() as i32 + 1;
+    let mut scale = (2.0f64).powi(8 - e);
+    if (m as f64 * scale).round() >= 256.0 {
+        e += 1;
+        scale *= 0.5;
+    }
+    let q = |x: f32| ((x as f64) * scale).round().min(255.0) as u8;
+    [q(c.x), q(c.y), q(c.z), (e + 128).clamp(0, 255) as u8]
+}
+
+pub fn decode_rgbe(p: [u8; 4]) -> Vec3 {
+    if p[3] == 0 {
+        return Vec3::ZERO;
+    }
+    let f = (2.0f64).powi(p[3] as i32 - 128 - 8);
+    Vec3::new(
+        (p[0] as f64 * f) as f32,
+        (p[1] as f64 * f) as f32,
+        (p[2] as f64 * f) as f32,
+    )
+}
+
+/// Octahedral unit-vector encoding in two bytes (about 1° of error).
+pub fn encode_octahedral(v: Vec3) -> [u8; 2] {
+    let v = v / (v.x.abs() + v.y.abs() + v.z.abs()).max(1e-30);
+    let (mut x, mut y) = (v.x, v.y);
+    if v.z < 0.0 {
+        let (ox, oy) = (x, y);
+        x = (1.0 - oy.abs()) * sign(ox);
+        y = (1.0 - ox.abs()) * sign(oy);
+    }
+    let q = |t: f32| ((t.clamp(-1.0, 1.0) * 0.5 + 0.5) * 254.0).round() as u8;
+    [q(x), q(y)]
+}
+
+pub fn decode_octahedral(p: [u8; 2]) -> Vec3 {
+    let x = p[0] as f32 / 254.0 * 2.0 - 1.0;
+    let y = p[1] as f32 / 254.0 * 2.0 - 1.0;
+    let z = 1.0 - x.abs() - y.abs();
+    let (x, y) = if z < 0.0 {
+        ((1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y))
+    } else {
+        (x, y)
+    };
+    Vec3::new(x, y, z).normalize()
+}
+
+fn sign(t: f32) -> f32 {
+    if t >= 0.0 { 1.0 } else { -1.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn record_is_twenty_bytes() {
+        assert_eq!(std::mem::size_of::<Photon>(), 20);
+    }
+
+    #[test]
+    fn rgbe_round_trip_is_within_half_a_step() {
+        for &s in &[1e-30f32, 1e-20, 1e-6, 0.37, 1.0, 3.0, 255.9, 1e6, 1e20, 1e30] {
+            let c = Vec3::new(s, 0.5 * s, 0.01 * s);
+            let d = decode_rgbe(encode_rgbe(c));
+            assert!((d.x - c.x).abs() <= c.x / 500.0, "{s}: {c} -> {d}");
+            assert!((d.y - c.y).abs() <= c.x / 500.0, "{s}: {c} -> {d}");
+        }
+        assert_eq!(decode_rgbe(encode_rgbe(Vec3::ONE)), Vec3::ONE);
+        assert_eq!(decode_rgbe(encode_rgbe(Vec3::ZERO)), Vec3::ZERO);
+        assert_eq!(decode_rgbe(encode_rgbe(Vec3::splat(f32::NAN))), Vec3::ZERO);
+    }
+
+    #[test]
+    fn octahedral_round_trip_is_within_two_degrees() {
+        let mut s = 1u32;
+        for _ in 0..5000 {
+            let mut r = || {
+                s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+                (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+            };
+            let v = Vec3::new(r(), r(), r());
+            if v.length() < 1e-3 {
+                continue;
+            }
+            let v = v.normalize();
+            let d = decode_octahedral(encode_octahedral(v));
+            assert!(v.dot(d) > (2.0f32).to_radians().cos(), "{v} -> {d}");
+        }
+        assert_eq!(decode_octahedral(encode_octahedral(Vec3::Z)), Vec3::Z);
+    }
+}
