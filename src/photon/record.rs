@@ -44,8 +44,8 @@ impl Photon {
     }
 }
 
-/// Shared-exponent RGB (Ward's RGBE), rounded to nearest: relative error of the largest
-/// channel is at most 1/512, and the range covers 1e-38..1e38 so extreme light powers survive.
+/// Shared-exponent RGB (Ward's RGBE), rounded to nearest: the error of every channel is at most
+/// 1/256 of the largest channel, and the range covers 1e-38..1e38 so extreme powers survive.
 pub fn encode_rgbe(c: Vec3) -> [u8; 4] {
     let c = c.max(Vec3::ZERO);
     let m = c.max_element();
@@ -118,8 +118,8 @@ mod tests {
         for &s in &[1e-30f32, 1e-20, 1e-6, 0.37, 1.0, 3.0, 255.9, 1e6, 1e20, 1e30] {
             let c = Vec3::new(s, 0.5 * s, 0.01 * s);
             let d = decode_rgbe(encode_rgbe(c));
-            assert!((d.x - c.x).abs() <= c.x / 500.0, "{s}: {c} -> {d}");
-            assert!((d.y - c.y).abs() <= c.x / 500.0, "{s}: {c} -> {d}");
+            assert!((d.x - c.x).abs() <= c.x / 255.0, "{s}: {c} -> {d}");
+            assert!((d.y - c.y).abs() <= c.x / 255.0, "{s}: {c} -> {d}");
         }
         assert_eq!(decode_rgbe(encode_rgbe(Vec3::ONE)), Vec3::ONE);
         assert_eq!(decode_rgbe(encode_rgbe(Vec3::ZERO)), Vec3::ZERO);
