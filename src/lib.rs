@@ -5,14 +5,14 @@
 //! Each stage is one module; each module's opening paragraph says what it owns and what it
 //! must not touch.
 
-pub mod embree;
-pub mod scene;
-pub mod sampling;
-pub mod optics;
-pub mod world;
-pub mod photon;
-pub mod estimate;
-pub mod render;
 pub mod density;
+pub mod embree;
+pub mod estimate;
 pub mod image_io;
+pub mod optics;
+pub mod photon;
+pub mod render;
+pub mod sampling;
+pub mod scene;
 pub mod timing;
+pub mod world;

@@ -22,7 +22,9 @@ impl Neighbours {
         Self::default()
     }
     pub fn with_capacity(k: usize) -> Self {
-        Self { items: Vec::with_capacity(k) }
+        Self {
+            items: Vec::with_capacity(k),
+        }
     }
     /// The neighbours found, in no particular order.
     pub fn as_slice(&self) -> &[Neighbour] {
@@ -36,7 +38,10 @@ impl Neighbours {
     }
     /// The farthest neighbour found (the k-th of a full k-nearest query).
     pub fn farthest(&self) -> Option<Neighbour> {
-        self.items.iter().copied().max_by(|a, b| a.dist2.total_cmp(&b.dist2))
+        self.items
+            .iter()
+            .copied()
+            .max_by(|a, b| a.dist2.total_cmp(&b.dist2))
     }
     pub fn clear(&mut self) {
         self.items.clear();
@@ -53,7 +58,10 @@ pub struct KdTree {
 impl KdTree {
     /// Builds the tree. Non-finite points are the caller's responsibility to reject.
     pub fn build(points: &[Vec3]) -> Self {
-        Self { points: points.to_vec(), source: (0..points.len() as u32).collect() }
+        Self {
+            points: points.to_vec(),
+            source: (0..points.len() as u32).collect(),
+        }
     }
     pub fn len(&self) -> usize {
         self.points.len()
@@ -75,7 +83,10 @@ impl KdTree {
             .points
             .iter()
             .enumerate()
-            .map(|(i, p)| Neighbour { dist2: p.distance_squared(query), slot: i as u32 })
+            .map(|(i, p)| Neighbour {
+                dist2: p.distance_squared(query),
+                slot: i as u32,
+            })
             .filter(|n| n.dist2 <= max_dist2)
             .collect();
         all.sort_by(|a, b| a.dist2.total_cmp(&b.dist2));

@@ -17,8 +17,15 @@ impl PhotonMap {
     pub fn build(photons: Vec<Photon>, emitted: u64) -> Self {
         let positions: Vec<Vec3> = photons.iter().map(Photon::position).collect();
         let tree = KdTree::build(&positions);
-        let photons = (0..tree.len()).map(|s| photons[tree.source_index(s) as usize]).collect();
-        Self { tree, photons, gradients: None, emitted }
+        let photons = (0..tree.len())
+            .map(|s| photons[tree.source_index(s) as usize])
+            .collect();
+        Self {
+            tree,
+            photons,
+            gradients: None,
+            emitted,
+        }
     }
     pub fn len(&self) -> usize {
         self.photons.len()

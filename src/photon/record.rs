@@ -115,7 +115,9 @@ mod tests {
 
     #[test]
     fn rgbe_round_trip_is_within_half_a_step() {
-        for &s in &[1e-30f32, 1e-20, 1e-6, 0.37, 1.0, 3.0, 255.9, 1e6, 1e20, 1e30] {
+        for &s in &[
+            1e-30f32, 1e-20, 1e-6, 0.37, 1.0, 3.0, 255.9, 1e6, 1e20, 1e30,
+        ] {
             let c = Vec3::new(s, 0.5 * s, 0.01 * s);
             let d = decode_rgbe(encode_rgbe(c));
             assert!((d.x - c.x).abs() <= c.x / 255.0, "{s}: {c} -> {d}");

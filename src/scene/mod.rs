@@ -28,10 +28,22 @@ pub struct Camera {
 /// `power` is the total emitted flux in watts per channel.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
-    Point { position: Vec3, power: Vec3 },
-    Sphere { center: Vec3, radius: f32, power: Vec3 },
+    Point {
+        position: Vec3,
+        power: Vec3,
+    },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        power: Vec3,
+    },
     /// Emits from one side only: the side `edge_u × edge_v` points to.
-    Quad { corner: Vec3, edge_u: Vec3, edge_v: Vec3, power: Vec3 },
+    Quad {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        power: Vec3,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -43,7 +55,11 @@ pub enum Material {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
-    Sphere { center: Vec3, radius: f32, material: u32 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        material: u32,
+    },
     Triangles(TriangleMesh),
 }
 
