@@ -1,1 +1,165 @@
-//! placeholder
+//! Deterministic random numbers and the sampling warps used by light transport. Every photon
+//! path and every pixel sample draws from its own generator, seeded from (seed, stream, index),
+//! so results never depend on the thread count. Owns numbers, not rays or scenes.
+
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// PCG32 (O'Neill): small, fast, and good enough for Monte Carlo.
+#[derive(Clone, Debug)]
+pub struct Rng {
+    state: u64,
+    inc: u64,
+}
+
+fn splitmix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Independent streams: photon tracing and eye rays must never share numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stream {
+    CausticPhotons = 1,
+    GlobalPhotons = 2,
+    Pixels = 3,
+    Distribution = 4,
+}
+
+impl Rng {
+    /// The generator for item `index` of `stream` under `seed`.
+    pub fn for_index(seed: u64, stream: Stream, index: u64) -> Self {
+        let a = splitmix64(seed ^ splitmix64(stream as u64));
+        let b = splitmix64(a ^ index.wrapping_mul(0xD6E8_FEB8_6659_FD93));
+        let mut rng = Self { state: 0, inc: (splitmix64(b) << 1) | 1 };
+        rng.next_u32();
+        rng.state = rng.state.wrapping_add(b);
+        rng.next_u32();
+        rng
+    }
+
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.state;
+        self.state = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(self.inc);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        let rot = (old >> 59) as u32;
+        xorshifted.rotate_right(rot)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+
+    pub fn next_2d(&mut self) -> (f32, f32) {
+        (self.next_f32(), self.next_f32())
+    }
+}
+
+/// An orthonormal basis (t, b, n) around a unit normal (Duff et al. 2017).
+pub fn basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// Uniform direction on the unit sphere.
+pub fn uniform_sphere(u: (f32, f32)) -> Vec3 {
+    let z = 1.0 - 2.0 * u.0;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.1;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Cosine-weighted direction around the unit normal `n` (pdf cosθ/π).
+pub fn cosine_hemisphere(n: Vec3, u: (f32, f32)) -> Vec3 {
+    let r = u.0.sqrt();
+    let phi = 2.0 * PI * u.1;
+    let (t, b) = basis(n);
+    let z = (1.0 - u.0).max(0.0).sqrt();
+    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * z).normalize()
+}
+
+/// Uniform direction in the cone around unit `axis` with half-angle cosine `cos_max`
+/// (pdf 1 / (2π (1 − cos_max))).
+pub fn uniform_cone(axis: Vec3, cos_max: f32, u: (f32, f32)) -> Vec3 {
+    let cos_t = 1.0 - u.0 * (1.0 - cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.1;
+    let (t, b) = basis(axis);
+    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + axis * cos_t).normalize()
+}
+
+/// Solid angle of a cone of half-angle cosine `cos_max`.
+pub fn cone_solid_angle(cos_max: f32) -> f32 {
+    2.0 * PI * (1.0 - cos_max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn streams_and_indices_are_independent_and_repeatable() {
+        let a: Vec<u32> = (0..4).map(|i| Rng::for_index(7, Stream::Pixels, i).next_u32()).collect();
+        let b: Vec<u32> = (0..4).map(|i| Rng::for_index(7, Stream::Pixels, i).next_u32()).collect();
+        assert_eq!(a, b);
+        let c = Rng::for_index(7, Stream::CausticPhotons, 0).next_u32();
+        assert_ne!(a[0], c);
+        assert_ne!(a[0], a[1]);
+        assert_ne!(Rng::for_index(8, Stream::Pixels, 0).next_u32(), a[0]);
+    }
+
+    #[test]
+    fn uniform_floats_have_the_right_mean_and_range() {
+        let mut rng = Rng::for_index(1, Stream::Pixels, 0);
+        let n = 100_000;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let x = rng.next_f32();
+            assert!((0.0..1.0).contains(&x));
+            sum += x as f64;
+        }
+        assert!((sum / n as f64 - 0.5).abs() < 0.005);
+    }
+
+    #[test]
+    fn basis_is_orthonormal_for_any_normal() {
+        let mut rng = Rng::for_index(3, Stream::Pixels, 0);
+        for i in 0..1000 {
+            let n = if i == 0 { -Vec3::Z } else { uniform_sphere(rng.next_2d()) };
+            let (t, b) = basis(n);
+            assert!((t.length() - 1.0).abs() < 1e-4 && (b.length() - 1.0).abs() < 1e-4);
+            assert!(t.dot(b).abs() < 1e-4 && t.dot(n).abs() < 1e-4 && b.dot(n).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn cosine_hemisphere_has_mean_cosine_two_thirds() {
+        let mut rng = Rng::for_index(4, Stream::Pixels, 0);
+        let n = Vec3::new(0.3, -0.5, 0.8).normalize();
+        let m = 200_000;
+        let mean: f64 = (0..m)
+            .map(|_| cosine_hemisphere(n, rng.next_2d()).dot(n) as f64)
+            .sum::<f64>()
+            / m as f64;
+        assert!((mean - 2.0 / 3.0).abs() < 0.003, "{mean}");
+    }
+
+    #[test]
+    fn cone_samples_stay_inside_the_cone() {
+        let mut rng = Rng::for_index(5, Stream::Pixels, 0);
+        let axis = Vec3::new(1.0, 2.0, -0.5).normalize();
+        for _ in 0..10_000 {
+            let d = uniform_cone(axis, 0.9, rng.next_2d());
+            assert!(d.dot(axis) >= 0.9 - 1e-5);
+        }
+        assert!((cone_solid_angle(-1.0) - 4.0 * PI).abs() < 1e-5);
+    }
+}

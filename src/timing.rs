@@ -1,1 +1,106 @@
-//! placeholder
+//! Phase timing and progress: every long stage shows an indicatif bar (hidden when stderr is not
+//! a terminal) and records its wall time and counts, printed at the end as a table and written
+//! as JSON with `--stats`. Owns reporting only; it never changes what is computed.
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::Serialize;
+use std::time::{Duration, Instant};
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Phase {
+    pub name: String,
+    pub seconds: f64,
+    /// Named counts (photons emitted, stored, pixels, ...).
+    pub counts: Vec<(String, u64)>,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PhaseTimes {
+    pub phases: Vec<Phase>,
+}
+
+impl PhaseTimes {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Runs `f` as a phase named `name`, recording its wall time.
+    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let start = Instant::now();
+        let out = f();
+        self.record(name, start.elapsed(), &[]);
+        out
+    }
+
+    pub fn record(&mut self, name: &str, elapsed: Duration, counts: &[(&str, u64)]) {
+        self.phases.push(Phase {
+            name: name.to_string(),
+            seconds: elapsed.as_secs_f64(),
+            counts: counts.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        });
+    }
+
+    /// Adds counts to the most recent phase called `name`.
+    pub fn add_counts(&mut self, name: &str, counts: &[(&str, u64)]) {
+        if let Some(p) = self.phases.iter_mut().rev().find(|p| p.name == name) {
+            p.counts.extend(counts.iter().map(|(k, v)| (k.to_string(), *v)));
+        }
+    }
+
+    pub fn seconds(&self, name: &str) -> f64 {
+        self.phases.iter().filter(|p| p.name == name).map(|p| p.seconds).sum()
+    }
+
+    pub fn total_seconds(&self) -> f64 {
+        self.phases.iter().map(|p| p.seconds).sum()
+    }
+
+    /// The per-phase table printed at the end of a run.
+    pub fn table(&self) -> String {
+        let total = self.total_seconds().max(1e-12);
+        let mut out = format!("{:<22} {:>10} {:>7}  counts\n", "phase", "seconds", "share");
+        for p in &self.phases {
+            let counts: Vec<String> = p.counts.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            out += &format!(
+                "{:<22} {:>10.3} {:>6.1}%  {}\n",
+                p.name,
+                p.seconds,
+                100.0 * p.seconds / total,
+                counts.join(" ")
+            );
+        }
+        out += &format!("{:<22} {:>10.3} {:>6.1}%\n", "total", self.total_seconds(), 100.0);
+        out
+    }
+}
+
+/// A progress bar on stderr for `len` units of work, hidden unless stderr is a terminal.
+pub fn progress(len: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let style = ProgressStyle::with_template("{msg:>18} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}")
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+    bar.set_style(style);
+    bar.set_message(what.to_string());
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_lists_every_phase_and_the_total() {
+        let mut t = PhaseTimes::new();
+        t.record("photon tracing", Duration::from_millis(1500), &[("stored", 10)]);
+        t.record("render", Duration::from_millis(500), &[]);
+        let table = t.table();
+        assert!(table.contains("photon tracing") && table.contains("stored=10"));
+        assert!(table.contains("75.0%") && table.contains("25.0%"));
+        assert!((t.total_seconds() - 2.0).abs() < 1e-9);
+        assert!((t.seconds("render") - 0.5).abs() < 1e-9);
+    }
+}

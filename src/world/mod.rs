@@ -1,0 +1,172 @@
+//! The world: a scene description turned into one committed Embree scene, plus what light
+//! transport asks of a hit (position, normals, material or emitter) and of the lights
+//! ([`lights`]). Owns the link between Embree geometry ids and scene objects; must not store
+//! photons, estimate radiance or know about images.
+
+pub mod lights;
+
+use crate::embree::{self, EmbreeError};
+use crate::scene::{Light, Material, SceneDescription, Shape};
+use glam::Vec3;
+
+/// What an Embree geometry id stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GeometryKind {
+    Mesh { shape: usize },
+    Sphere { shape: usize },
+    /// Visible geometry of an area light (`lights[light]`).
+    Emitter { light: usize },
+}
+
+/// What was hit: a surface with a material, or an area light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Surface {
+    Material(u32),
+    Light(usize),
+}
+
+/// A ray's closest hit, resolved for shading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interaction {
+    pub t: f32,
+    pub position: Vec3,
+    /// Unit geometric normal, oriented by the geometry (outward for spheres, by winding for meshes).
+    pub geometric_normal: Vec3,
+    /// Unit shading normal (interpolated vertex normals), on the geometric normal's side.
+    pub shading_normal: Vec3,
+    pub surface: Surface,
+}
+
+/// A bounding sphere, used to aim caustic photons at specular objects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundingSphere {
+    pub center: Vec3,
+    pub radius: f32,
+}
+
+pub struct World {
+    pub description: SceneDescription,
+    accel: embree::Scene,
+    geometry: Vec<GeometryKind>,
+    /// Bounds of all mirror and glass objects; `None` when the scene has none.
+    pub specular_bounds: Option<BoundingSphere>,
+    /// Diagonal of the scene's bounding box: sets the ray epsilon and the default radii.
+    pub scale: f32,
+}
+
+impl World {
+    pub fn new(description: SceneDescription) -> Result<Self, EmbreeError> {
+        let device = embree::Device::new()?;
+        let mut builder = device.scene_builder()?;
+        let mut geometry = Vec::new();
+        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        for (i, shape) in description.shapes.iter().enumerate() {
+            let (kind, (a, b), material) = match shape {
+                Shape::Sphere { center, radius, material } => {
+                    builder.add_spheres(&[(*center, *radius)])?;
+                    let r = Vec3::splat(*radius);
+                    (GeometryKind::Sphere { shape: i }, (*center - r, *center + r), *material)
+                }
+                Shape::Triangles(mesh) => {
+                    builder.add_triangles(&mesh.positions, &mesh.triangles)?;
+                    let a = mesh.positions.iter().fold(Vec3::splat(f32::MAX), |m, p| m.min(*p));
+                    let b = mesh.positions.iter().fold(Vec3::splat(f32::MIN), |m, p| m.max(*p));
+                    (GeometryKind::Mesh { shape: i }, (a, b), mesh.material)
+                }
+            };
+            geometry.push(kind);
+            lo = lo.min(a);
+            hi = hi.max(b);
+            if !matches!(description.materials[material as usize], Material::Diffuse { .. }) {
+                spec_lo = spec_lo.min(a);
+                spec_hi = spec_hi.max(b);
+            }
+        }
+        for (i, light) in description.lights.iter().enumerate() {
+            match light {
+                Light::Point { position, .. } => {
+                    lo = lo.min(*position);
+                    hi = hi.max(*position);
+                    continue;
+                }
+                Light::Sphere { center, radius, .. } => {
+                    builder.add_spheres(&[(*center, *radius)])?;
+                }
+                Light::Quad { corner, edge_u, edge_v, .. } => {
+                    let p = [*corner, *corner + *edge_u, *corner + *edge_u + *edge_v, *corner + *edge_v];
+                    builder.add_triangles(&p, &[[0, 1, 2], [0, 2, 3]])?;
+                }
+            }
+            geometry.push(GeometryKind::Emitter { light: i });
+        }
+        let accel = builder.commit()?;
+        let specular_bounds = (spec_lo.x <= spec_hi.x).then(|| BoundingSphere {
+            center: 0.5 * (spec_lo + spec_hi),
+            radius: 0.5 * (spec_hi - spec_lo).length() * 1.001 + 1e-6,
+        });
+        let scale = if lo.x <= hi.x { (hi - lo).length().max(1e-12) } else { 1.0 };
+        Ok(Self { description, accel, geometry, specular_bounds, scale })
+    }
+
+    /// Offset for spawning rays off a surface: relative to the scene's size so the picture
+    /// does not change with the scene's units.
+    pub fn ray_epsilon(&self) -> f32 {
+        self.scale * 2e-5
+    }
+
+    pub fn material(&self, id: u32) -> &Material {
+        &self.description.materials[id as usize]
+    }
+
+    /// Whether any object is a mirror or glass (so caustic photons exist).
+    pub fn has_specular(&self) -> bool {
+        self.specular_bounds.is_some()
+    }
+
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {
+        self.accel.occluded(origin, dir, tnear, tfar)
+    }
+
+    /// The closest hit along a ray with unit `dir`.
+    pub fn intersect(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> Option<Interaction> {
+        let hit = self.accel.intersect(origin, dir, tnear, tfar)?;
+        let position = origin + hit.t * dir;
+        let kind = self.geometry[hit.geometry as usize];
+        let (geometric_normal, shading_normal, surface) = match kind {
+            GeometryKind::Sphere { shape } => {
+                let Shape::Sphere { center, material, .. } = &self.description.shapes[shape] else {
+                    unreachable!("geometry kinds follow the shapes")
+                };
+                let n = (position - *center).normalize_or(Vec3::Z);
+                (n, n, Surface::Material(*material))
+            }
+            GeometryKind::Mesh { shape } => {
+                let Shape::Triangles(mesh) = &self.description.shapes[shape] else {
+                    unreachable!("geometry kinds follow the shapes")
+                };
+                let [i0, i1, i2] = mesh.triangles[hit.primitive as usize].map(|i| i as usize);
+                let p = &mesh.positions;
+                let ng = (p[i1] - p[i0]).cross(p[i2] - p[i0]).normalize_or(hit.normal.normalize_or(Vec3::Z));
+                let ns = match &mesh.normals {
+                    Some(n) => {
+                        let s = (1.0 - hit.u - hit.v) * n[i0] + hit.u * n[i1] + hit.v * n[i2];
+                        let s = s.normalize_or(ng);
+                        if s.dot(ng) < 0.0 { -s } else { s }
+                    }
+                    None => ng,
+                };
+                (ng, ns, Surface::Material(mesh.material))
+            }
+            GeometryKind::Emitter { light } => {
+                let n = match &self.description.lights[light] {
+                    Light::Sphere { center, .. } => (position - *center).normalize_or(Vec3::Z),
+                    Light::Quad { edge_u, edge_v, .. } => edge_u.cross(*edge_v).normalize_or(Vec3::Z),
+                    Light::Point { .. } => unreachable!("point lights have no geometry"),
+                };
+                (n, n, Surface::Light(light))
+            }
+        };
+        Some(Interaction { t: hit.t, position, geometric_normal, shading_normal, surface })
+    }
+}
