@@ -1,0 +1,289 @@
+//! The scene file format as serde structs (documented field by field in docs/scene-format.md),
+//! and the walk over the document's top level that picks each `[[lights]]`, `[materials.*]`
+//! and `[[objects]]` entry's struct by its `type` tag. Owns the shape of the format only: it
+//! checks types and field names, not values (that is `validate`), and reads no other files.
+
+use super::SceneError;
+use super::document::{Document, Value, child_path, quoted_list};
+use serde::Deserialize;
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use std::fmt;
+use toml::de::DeValue;
+
+const TOP_LEVEL_FIELDS: [&str; 4] = ["camera", "lights", "materials", "objects"];
+const LIGHT_TYPES: [&str; 3] = ["point", "sphere", "quad"];
+const MATERIAL_TYPES: [&str; 3] = ["diffuse", "mirror", "glass"];
+const OBJECT_TYPES: [&str; 3] = ["sphere", "quad", "mesh"];
+
+/// The whole file, typed but not yet checked.
+pub(crate) struct SceneSpec {
+    pub camera: CameraSpec,
+    pub lights: Vec<LightSpec>,
+    /// In name order.
+    pub materials: Vec<(String, MaterialSpec)>,
+    pub objects: Vec<ObjectSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraSpec {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    pub up: [f32; 3],
+    /// Vertical field of view in degrees.
+    pub fov_y: f32,
+    /// [width, height] in pixels.
+    pub resolution: [u32; 2],
+}
+
+pub(crate) enum LightSpec {
+    Point(PointLightSpec),
+    Sphere(SphereLightSpec),
+    Quad(QuadLightSpec),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PointLightSpec {
+    pub position: [f32; 3],
+    pub power: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SphereLightSpec {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub power: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct QuadLightSpec {
+    pub corner: [f32; 3],
+    pub edge_u: [f32; 3],
+    pub edge_v: [f32; 3],
+    pub power: [f32; 3],
+}
+
+pub(crate) enum MaterialSpec {
+    Diffuse(DiffuseSpec),
+    Mirror(MirrorSpec),
+    Glass(GlassSpec),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct DiffuseSpec {
+    pub albedo: [f32; 3],
+}
+
+/// A mirror has no parameters; the struct exists to reject stray fields.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MirrorSpec {}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct GlassSpec {
+    pub ior: f32,
+}
+
+pub(crate) enum ObjectSpec {
+    Sphere(SphereSpec),
+    Quad(QuadSpec),
+    Mesh(MeshSpec),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SphereSpec {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct QuadSpec {
+    pub corner: [f32; 3],
+    pub edge_u: [f32; 3],
+    pub edge_v: [f32; 3],
+    pub material: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MeshSpec {
+    /// OBJ path, relative to the scene file's folder.
+    pub file: String,
+    /// Scene material for every face, overriding the OBJ's MTL materials.
+    #[serde(default)]
+    pub material: Option<String>,
+    #[serde(default)]
+    pub translate: [f32; 3],
+    /// Degrees about x, then y, then z.
+    #[serde(default)]
+    pub rotate: [f32; 3],
+    #[serde(default)]
+    pub scale: Scale,
+}
+
+/// `scale = 2.0` or `scale = [1.0, 0.5, 1.0]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Scale {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+impl Default for Scale {
+    fn default() -> Self {
+        Scale::Uniform(1.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_any(ScaleVisitor)
+    }
+}
+
+struct ScaleVisitor;
+
+impl<'de> Visitor<'de> for ScaleVisitor {
+    type Value = Scale;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a number or an array of three numbers")
+    }
+
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale, E> {
+        Ok(Scale::Uniform(v as f32))
+    }
+
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale, E> {
+        Ok(Scale::Uniform(v as f32))
+    }
+
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale, E> {
+        Ok(Scale::Uniform(v as f32))
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Scale, A::Error> {
+        let mut factors = [0.0f32; 3];
+        for (i, factor) in factors.iter_mut().enumerate() {
+            *factor = seq
+                .next_element()?
+                .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+        }
+        if seq.next_element::<de::IgnoredAny>()?.is_some() {
+            return Err(de::Error::invalid_length(4, &self));
+        }
+        Ok(Scale::PerAxis(factors))
+    }
+}
+
+/// Reads the top level: `camera` (required), `lights` and `objects` (required, non-empty arrays
+/// of tables), `materials` (a table of named tables, may be absent).
+pub(crate) fn read_scene(doc: &Document) -> Result<SceneSpec, SceneError> {
+    let root = doc.root();
+    for (key, _) in root.iter() {
+        if !TOP_LEVEL_FIELDS.contains(&key.get_ref().as_ref()) {
+            return Err(doc.error(
+                &child_path("", key.get_ref()),
+                format!(
+                    "unknown field, expected one of {}",
+                    quoted_list(&TOP_LEVEL_FIELDS)
+                ),
+            ));
+        }
+    }
+
+    let camera = match root.get("camera") {
+        Some(value) => doc.deserialize::<CameraSpec>(value)?,
+        None => return Err(doc.error("camera", "missing field")),
+    };
+
+    let lights = array_of_tables(doc, "lights")?
+        .iter()
+        .enumerate()
+        .map(|(i, value)| read_light(doc, &format!("lights[{i}]"), value))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    let mut materials = Vec::new();
+    if let Some(value) = root.get("materials") {
+        let DeValue::Table(table) = value.get_ref() else {
+            return Err(doc.error("materials", "expected a table of named materials"));
+        };
+        for (name, value) in table.iter() {
+            let path = child_path("materials", name.get_ref());
+            materials.push((
+                name.get_ref().to_string(),
+                read_material(doc, &path, value)?,
+            ));
+        }
+    }
+
+    let objects = array_of_tables(doc, "objects")?
+        .iter()
+        .enumerate()
+        .map(|(i, value)| read_object(doc, &format!("objects[{i}]"), value))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    Ok(SceneSpec {
+        camera,
+        lights,
+        materials,
+        objects,
+    })
+}
+
+/// The non-empty array of tables at top-level `key` (`[[key]]`).
+fn array_of_tables<'d, 't>(
+    doc: &'d Document<'t>,
+    key: &str,
+) -> Result<&'d [Value<'t>], SceneError> {
+    let Some(value) = doc.root().get(key) else {
+        return Err(doc.error(key, format!("missing field (add at least one [[{key}]])")));
+    };
+    match value.get_ref() {
+        DeValue::Array(items) if items.is_empty() => {
+            Err(doc.error(key, format!("needs at least one entry ([[{key}]])")))
+        }
+        DeValue::Array(items) => Ok(items),
+        other => Err(doc.error(
+            key,
+            format!(
+                "expected an array of tables ([[{key}]]), found {}",
+                other.type_str()
+            ),
+        )),
+    }
+}
+
+fn read_light(doc: &Document, path: &str, value: &Value) -> Result<LightSpec, SceneError> {
+    let (kind, fields) = doc.tagged(path, value, &LIGHT_TYPES)?;
+    Ok(match kind {
+        "point" => LightSpec::Point(doc.deserialize(&fields)?),
+        "sphere" => LightSpec::Sphere(doc.deserialize(&fields)?),
+        _ => LightSpec::Quad(doc.deserialize(&fields)?),
+    })
+}
+
+fn read_material(doc: &Document, path: &str, value: &Value) -> Result<MaterialSpec, SceneError> {
+    let (kind, fields) = doc.tagged(path, value, &MATERIAL_TYPES)?;
+    Ok(match kind {
+        "diffuse" => MaterialSpec::Diffuse(doc.deserialize(&fields)?),
+        "mirror" => MaterialSpec::Mirror(doc.deserialize(&fields)?),
+        _ => MaterialSpec::Glass(doc.deserialize(&fields)?),
+    })
+}
+
+fn read_object(doc: &Document, path: &str, value: &Value) -> Result<ObjectSpec, SceneError> {
+    let (kind, fields) = doc.tagged(path, value, &OBJECT_TYPES)?;
+    Ok(match kind {
+        "sphere" => ObjectSpec::Sphere(doc.deserialize(&fields)?),
+        "quad" => ObjectSpec::Quad(doc.deserialize(&fields)?),
+        _ => ObjectSpec::Mesh(doc.deserialize(&fields)?),
+    })
+}

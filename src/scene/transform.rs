@@ -1,0 +1,77 @@
+//! Placement of a mesh in the world: scale, then rotate about x, then y, then z (fixed world
+//! axes, degrees, right-hand rule), then translate. Owns the point and normal maps only; the
+//! values are checked in `validate` and applied to vertices in `mesh`.
+
+use glam::{Mat3, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Transform {
+    /// Rotation times scale.
+    linear: Mat3,
+    /// Inverse transpose of `linear`: maps normals so they stay perpendicular to surfaces.
+    normal_map: Mat3,
+    translation: Vec3,
+}
+
+impl Transform {
+    /// `scale` has positive finite factors, so the map is invertible and keeps orientation.
+    pub(crate) fn new(translate: Vec3, rotate_degrees: Vec3, scale: Vec3) -> Transform {
+        let rotation = Mat3::from_rotation_z(rotate_degrees.z.to_radians())
+            * Mat3::from_rotation_y(rotate_degrees.y.to_radians())
+            * Mat3::from_rotation_x(rotate_degrees.x.to_radians());
+        let linear = rotation * Mat3::from_diagonal(scale);
+        // (R S)^-T = R S^-1, exact without a general inverse.
+        let normal_map = rotation * Mat3::from_diagonal(scale.recip());
+        Transform {
+            linear,
+            normal_map,
+            translation: translate,
+        }
+    }
+
+    pub(crate) fn point(&self, p: Vec3) -> Vec3 {
+        self.linear * p + self.translation
+    }
+
+    /// The unit world normal for object-space normal `n` (not necessarily unit); zero when `n`
+    /// is zero.
+    pub(crate) fn normal(&self, n: Vec3) -> Vec3 {
+        (self.normal_map * n).normalize_or_zero()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn rotations_follow_the_right_hand_rule_in_x_y_z_order() {
+        let about_x = Transform::new(Vec3::ZERO, Vec3::new(90.0, 0.0, 0.0), Vec3::ONE);
+        assert!(close(about_x.point(Vec3::Y), Vec3::Z));
+        let about_y = Transform::new(Vec3::ZERO, Vec3::new(0.0, 90.0, 0.0), Vec3::ONE);
+        assert!(close(about_y.point(Vec3::Z), Vec3::X));
+        // x first (y → z), then z (z stays): a z-first order would give -x instead.
+        let x_then_z = Transform::new(Vec3::ZERO, Vec3::new(90.0, 0.0, 90.0), Vec3::ONE);
+        assert!(close(x_then_z.point(Vec3::Y), Vec3::Z));
+        assert!(close(x_then_z.point(Vec3::X), Vec3::Y));
+    }
+
+    #[test]
+    fn normals_stay_perpendicular_under_non_uniform_scale() {
+        let t = Transform::new(
+            Vec3::ONE,
+            Vec3::new(10.0, 20.0, 30.0),
+            Vec3::new(3.0, 0.5, 1.0),
+        );
+        let tangent = Vec3::new(1.0, -1.0, 0.0);
+        let normal = Vec3::new(1.0, 1.0, 0.0);
+        let world_tangent = t.point(tangent) - t.point(Vec3::ZERO);
+        let world_normal = t.normal(normal);
+        assert!((world_normal.length() - 1.0).abs() < 1e-6);
+        assert!(world_normal.dot(world_tangent).abs() < 1e-5);
+    }
+}
