@@ -33,7 +33,10 @@ impl Rng {
     pub fn for_index(seed: u64, stream: Stream, index: u64) -> Self {
         let a = splitmix64(seed ^ splitmix64(stream as u64));
         let b = splitmix64(a ^ index.wrapping_mul(0xD6E8_FEB8_6659_FD93));
-        let mut rng = Self { state: 0, inc: (splitmix64(b) << 1) | 1 };
+        let mut rng = Self {
+            state: 0,
+            inc: (splitmix64(b) << 1) | 1,
+        };
         rng.next_u32();
         rng.state = rng.state.wrapping_add(b);
         rng.next_u32();
@@ -42,7 +45,9 @@ impl Rng {
 
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
-        self.state = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(self.inc);
+        self.state = old
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(self.inc);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
         let rot = (old >> 59) as u32;
         xorshifted.rotate_right(rot)
@@ -107,8 +112,12 @@ mod tests {
 
     #[test]
     fn streams_and_indices_are_independent_and_repeatable() {
-        let a: Vec<u32> = (0..4).map(|i| Rng::for_index(7, Stream::Pixels, i).next_u32()).collect();
-        let b: Vec<u32> = (0..4).map(|i| Rng::for_index(7, Stream::Pixels, i).next_u32()).collect();
+        let a: Vec<u32> = (0..4)
+            .map(|i| Rng::for_index(7, Stream::Pixels, i).next_u32())
+            .collect();
+        let b: Vec<u32> = (0..4)
+            .map(|i| Rng::for_index(7, Stream::Pixels, i).next_u32())
+            .collect();
         assert_eq!(a, b);
         let c = Rng::for_index(7, Stream::CausticPhotons, 0).next_u32();
         assert_ne!(a[0], c);
@@ -133,7 +142,11 @@ mod tests {
     fn basis_is_orthonormal_for_any_normal() {
         let mut rng = Rng::for_index(3, Stream::Pixels, 0);
         for i in 0..1000 {
-            let n = if i == 0 { -Vec3::Z } else { uniform_sphere(rng.next_2d()) };
+            let n = if i == 0 {
+                -Vec3::Z
+            } else {
+                uniform_sphere(rng.next_2d())
+            };
             let (t, b) = basis(n);
             assert!((t.length() - 1.0).abs() < 1e-4 && (b.length() - 1.0).abs() < 1e-4);
             assert!(t.dot(b).abs() < 1e-4 && t.dot(n).abs() < 1e-4 && b.dot(n).abs() < 1e-4);

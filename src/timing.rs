@@ -43,12 +43,17 @@ impl PhaseTimes {
     /// Adds counts to the most recent phase called `name`.
     pub fn add_counts(&mut self, name: &str, counts: &[(&str, u64)]) {
         if let Some(p) = self.phases.iter_mut().rev().find(|p| p.name == name) {
-            p.counts.extend(counts.iter().map(|(k, v)| (k.to_string(), *v)));
+            p.counts
+                .extend(counts.iter().map(|(k, v)| (k.to_string(), *v)));
         }
     }
 
     pub fn seconds(&self, name: &str) -> f64 {
-        self.phases.iter().filter(|p| p.name == name).map(|p| p.seconds).sum()
+        self.phases
+            .iter()
+            .filter(|p| p.name == name)
+            .map(|p| p.seconds)
+            .sum()
     }
 
     pub fn total_seconds(&self) -> f64 {
@@ -69,7 +74,12 @@ impl PhaseTimes {
                 counts.join(" ")
             );
         }
-        out += &format!("{:<22} {:>10.3} {:>6.1}%\n", "total", self.total_seconds(), 100.0);
+        out += &format!(
+            "{:<22} {:>10.3} {:>6.1}%\n",
+            "total",
+            self.total_seconds(),
+            100.0
+        );
         out
     }
 }
@@ -80,9 +90,11 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    let style = ProgressStyle::with_template("{msg:>18} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}")
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
+    let style = ProgressStyle::with_template(
+        "{msg:>18} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
     bar.set_style(style);
     bar.set_message(what.to_string());
     bar
@@ -95,7 +107,11 @@ mod tests {
     #[test]
     fn table_lists_every_phase_and_the_total() {
         let mut t = PhaseTimes::new();
-        t.record("photon tracing", Duration::from_millis(1500), &[("stored", 10)]);
+        t.record(
+            "photon tracing",
+            Duration::from_millis(1500),
+            &[("stored", 10)],
+        );
         t.record("render", Duration::from_millis(500), &[]);
         let table = t.table();
         assert!(table.contains("photon tracing") && table.contains("stored=10"));

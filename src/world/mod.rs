@@ -12,10 +12,16 @@ use glam::Vec3;
 /// What an Embree geometry id stands for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum GeometryKind {
-    Mesh { shape: usize },
-    Sphere { shape: usize },
+    Mesh {
+        shape: usize,
+    },
+    Sphere {
+        shape: usize,
+    },
     /// Visible geometry of an area light (`lights[light]`).
-    Emitter { light: usize },
+    Emitter {
+        light: usize,
+    },
 }
 
 /// What was hit: a surface with a material, or an area light.
@@ -63,22 +69,39 @@ impl World {
         let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         for (i, shape) in description.shapes.iter().enumerate() {
             let (kind, (a, b), material) = match shape {
-                Shape::Sphere { center, radius, material } => {
+                Shape::Sphere {
+                    center,
+                    radius,
+                    material,
+                } => {
                     builder.add_spheres(&[(*center, *radius)])?;
                     let r = Vec3::splat(*radius);
-                    (GeometryKind::Sphere { shape: i }, (*center - r, *center + r), *material)
+                    (
+                        GeometryKind::Sphere { shape: i },
+                        (*center - r, *center + r),
+                        *material,
+                    )
                 }
                 Shape::Triangles(mesh) => {
                     builder.add_triangles(&mesh.positions, &mesh.triangles)?;
-                    let a = mesh.positions.iter().fold(Vec3::splat(f32::MAX), |m, p| m.min(*p));
-                    let b = mesh.positions.iter().fold(Vec3::splat(f32::MIN), |m, p| m.max(*p));
+                    let a = mesh
+                        .positions
+                        .iter()
+                        .fold(Vec3::splat(f32::MAX), |m, p| m.min(*p));
+                    let b = mesh
+                        .positions
+                        .iter()
+                        .fold(Vec3::splat(f32::MIN), |m, p| m.max(*p));
                     (GeometryKind::Mesh { shape: i }, (a, b), mesh.material)
                 }
             };
             geometry.push(kind);
             lo = lo.min(a);
             hi = hi.max(b);
-            if !matches!(description.materials[material as usize], Material::Diffuse { .. }) {
+            if !matches!(
+                description.materials[material as usize],
+                Material::Diffuse { .. }
+            ) {
                 spec_lo = spec_lo.min(a);
                 spec_hi = spec_hi.max(b);
             }
@@ -93,8 +116,18 @@ impl World {
                 Light::Sphere { center, radius, .. } => {
                     builder.add_spheres(&[(*center, *radius)])?;
                 }
-                Light::Quad { corner, edge_u, edge_v, .. } => {
-                    let p = [*corner, *corner + *edge_u, *corner + *edge_u + *edge_v, *corner + *edge_v];
+                Light::Quad {
+                    corner,
+                    edge_u,
+                    edge_v,
+                    ..
+                } => {
+                    let p = [
+                        *corner,
+                        *corner + *edge_u,
+                        *corner + *edge_u + *edge_v,
+                        *corner + *edge_v,
+                    ];
                     builder.add_triangles(&p, &[[0, 1, 2], [0, 2, 3]])?;
                 }
             }
@@ -105,8 +138,18 @@ impl World {
             center: 0.5 * (spec_lo + spec_hi),
             radius: 0.5 * (spec_hi - spec_lo).length() * 1.001 + 1e-6,
         });
-        let scale = if lo.x <= hi.x { (hi - lo).length().max(1e-12) } else { 1.0 };
-        Ok(Self { description, accel, geometry, specular_bounds, scale })
+        let scale = if lo.x <= hi.x {
+            (hi - lo).length().max(1e-12)
+        } else {
+            1.0
+        };
+        Ok(Self {
+            description,
+            accel,
+            geometry,
+            specular_bounds,
+            scale,
+        })
     }
 
     /// Offset for spawning rays off a surface: relative to the scene's size so the picture
@@ -135,7 +178,10 @@ impl World {
         let kind = self.geometry[hit.geometry as usize];
         let (geometric_normal, shading_normal, surface) = match kind {
             GeometryKind::Sphere { shape } => {
-                let Shape::Sphere { center, material, .. } = &self.description.shapes[shape] else {
+                let Shape::Sphere {
+                    center, material, ..
+                } = &self.description.shapes[shape]
+                else {
                     unreachable!("geometry kinds follow the shapes")
                 };
                 let n = (position - *center).normalize_or(Vec3::Z);
@@ -147,7 +193,9 @@ impl World {
                 };
                 let [i0, i1, i2] = mesh.triangles[hit.primitive as usize].map(|i| i as usize);
                 let p = &mesh.positions;
-                let ng = (p[i1] - p[i0]).cross(p[i2] - p[i0]).normalize_or(hit.normal.normalize_or(Vec3::Z));
+                let ng = (p[i1] - p[i0])
+                    .cross(p[i2] - p[i0])
+                    .normalize_or(hit.normal.normalize_or(Vec3::Z));
                 let ns = match &mesh.normals {
                     Some(n) => {
                         let s = (1.0 - hit.u - hit.v) * n[i0] + hit.u * n[i1] + hit.v * n[i2];
@@ -161,12 +209,20 @@ impl World {
             GeometryKind::Emitter { light } => {
                 let n = match &self.description.lights[light] {
                     Light::Sphere { center, .. } => (position - *center).normalize_or(Vec3::Z),
-                    Light::Quad { edge_u, edge_v, .. } => edge_u.cross(*edge_v).normalize_or(Vec3::Z),
+                    Light::Quad { edge_u, edge_v, .. } => {
+                        edge_u.cross(*edge_v).normalize_or(Vec3::Z)
+                    }
                     Light::Point { .. } => unreachable!("point lights have no geometry"),
                 };
                 (n, n, Surface::Light(light))
             }
         };
-        Some(Interaction { t: hit.t, position, geometric_normal, shading_normal, surface })
+        Some(Interaction {
+            t: hit.t,
+            position,
+            geometric_normal,
+            shading_normal,
+            surface,
+        })
     }
 }

@@ -1,0 +1,221 @@
+//! The eye pass's integrator: Whitted-style recursion through mirrors and glass (Fresnel, total
+//! internal reflection) to a depth limit; at diffuse surfaces direct light by shadow rays, the
+//! caustic map's estimate, and indirect light from the global map (final gathering, or the
+//! map shown directly). Owns shading; must not build maps or write images.
+
+use crate::estimate::{Query, RadianceEstimate, Scratch};
+use crate::optics::{fresnel_dielectric, reflect, refract};
+use crate::photon::PhotonMap;
+use crate::sampling::{Rng, cosine_hemisphere};
+use crate::scene::Material;
+use crate::world::lights::{emitted_radiance, sample_incident};
+use crate::world::{Interaction, Surface, World};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// A photon map with the estimate that reads it.
+pub struct EstimatedMap<'a> {
+    pub map: &'a PhotonMap,
+    pub estimate: &'a dyn RadianceEstimate,
+}
+
+impl EstimatedMap<'_> {
+    fn irradiance(&self, query: &Query, scratch: &mut Scratch) -> Vec3 {
+        self.estimate.irradiance(self.map, query, scratch)
+    }
+}
+
+/// How indirect diffuse light is found.
+pub enum Indirect<'a> {
+    None,
+    /// The global map's estimate at the eye ray's diffuse hit (it holds indirect photons only).
+    Visualize(EstimatedMap<'a>),
+    /// `rays` cosine-distributed gather rays, each reading the global map (which then holds
+    /// every diffuse photon) where it lands.
+    FinalGather {
+        map: EstimatedMap<'a>,
+        rays: u32,
+    },
+}
+
+pub struct Integrator<'a> {
+    pub world: &'a World,
+    pub caustics: Option<EstimatedMap<'a>>,
+    pub indirect: Indirect<'a>,
+    /// Specular bounces followed from the eye.
+    pub max_depth: u32,
+}
+
+/// Specular bounces a gather ray follows before giving up.
+const GATHER_SPECULAR_DEPTH: u32 = 4;
+
+impl Integrator<'_> {
+    /// Radiance arriving at `origin` from direction `-dir` (unit `dir`).
+    pub fn radiance(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        depth: u32,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) -> Vec3 {
+        let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
+            return Vec3::ZERO;
+        };
+        let m = match hit.surface {
+            Surface::Light(l) => {
+                let light = &self.world.description.lights[l];
+                return emitted_radiance(light, -dir.dot(hit.geometric_normal));
+            }
+            Surface::Material(m) => m,
+        };
+        let (ng, ns) = facing(&hit, dir);
+        match self.world.material(m) {
+            Material::Diffuse { albedo } => {
+                let p = self.offset(hit.position, ng);
+                let mut irradiance = self.direct(p, ns, rng);
+                let query = Query {
+                    position: hit.position,
+                    normal: ns,
+                };
+                if let Some(c) = &self.caustics {
+                    irradiance += c.irradiance(&query, scratch);
+                }
+                let reflected = *albedo * FRAC_1_PI * irradiance;
+                reflected + *albedo * self.indirect(p, ns, &query, rng, scratch)
+            }
+            Material::Mirror if depth < self.max_depth => {
+                let r = reflect(dir, ns);
+                self.radiance(self.spawn(hit.position, ng, r), r, depth + 1, rng, scratch)
+            }
+            Material::Glass { ior } if depth < self.max_depth => {
+                let entering = dir.dot(hit.geometric_normal) < 0.0;
+                let eta = if entering { 1.0 / ior } else { *ior };
+                let f = fresnel_dielectric(-dir.dot(ns), eta);
+                let r = reflect(dir, ns);
+                let mut l =
+                    f * self.radiance(self.spawn(hit.position, ng, r), r, depth + 1, rng, scratch);
+                if let Some(t) = refract(dir, ns, eta).filter(|_| f < 1.0) {
+                    l += (1.0 - f)
+                        * self.radiance(
+                            self.spawn(hit.position, ng, t),
+                            t,
+                            depth + 1,
+                            rng,
+                            scratch,
+                        );
+                }
+                l
+            }
+            _ => Vec3::ZERO,
+        }
+    }
+
+    fn offset(&self, p: Vec3, n: Vec3) -> Vec3 {
+        p + n * self.world.ray_epsilon()
+    }
+
+    /// Origin for a ray leaving `p` in direction `d`, on the side `d` points to.
+    fn spawn(&self, p: Vec3, ng: Vec3, d: Vec3) -> Vec3 {
+        self.offset(p, if d.dot(ng) >= 0.0 { ng } else { -ng })
+    }
+
+    /// Direct irradiance at `p` with normal `n`: one shadow-tested sample per light.
+    fn direct(&self, p: Vec3, n: Vec3, rng: &mut Rng) -> Vec3 {
+        let mut e = Vec3::ZERO;
+        for light in &self.world.description.lights {
+            let Some(s) = sample_incident(light, p, rng) else {
+                continue;
+            };
+            let cos = n.dot(s.direction);
+            if cos <= 0.0 {
+                continue;
+            }
+            // Stop short of the light's own surface.
+            let tfar = s.distance * (1.0 - 1e-4);
+            if !self.world.occluded(p, s.direction, 0.0, tfar) {
+                e += s.irradiance * cos;
+            }
+        }
+        e
+    }
+
+    /// Indirect irradiance/π at a diffuse point (to be multiplied by the albedo).
+    fn indirect(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        query: &Query,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) -> Vec3 {
+        match &self.indirect {
+            Indirect::None => Vec3::ZERO,
+            Indirect::Visualize(g) => g.irradiance(query, scratch) * FRAC_1_PI,
+            Indirect::FinalGather { map, rays } => {
+                let mut sum = Vec3::ZERO;
+                for _ in 0..*rays {
+                    let d = cosine_hemisphere(n, rng.next_2d());
+                    sum += self.gathered(map, p, d, rng, scratch);
+                }
+                // Cosine-weighted sampling: E/π is the mean incoming radiance.
+                sum / (*rays).max(1) as f32
+            }
+        }
+    }
+
+    /// Radiance from the global map seen along a gather ray (through a few specular bounces).
+    fn gathered(
+        &self,
+        map: &EstimatedMap,
+        mut o: Vec3,
+        mut d: Vec3,
+        rng: &mut Rng,
+        scratch: &mut Scratch,
+    ) -> Vec3 {
+        for _ in 0..=GATHER_SPECULAR_DEPTH {
+            let Some(hit) = self.world.intersect(o, d, 0.0, f32::INFINITY) else {
+                break;
+            };
+            // Direct light from emitters is already counted by the shadow rays.
+            let Surface::Material(m) = hit.surface else {
+                break;
+            };
+            let (ng, ns) = facing(&hit, d);
+            let next = match self.world.material(m) {
+                Material::Diffuse { albedo } => {
+                    let q = Query {
+                        position: hit.position,
+                        normal: ns,
+                    };
+                    return *albedo * FRAC_1_PI * map.irradiance(&q, scratch);
+                }
+                Material::Mirror => reflect(d, ns),
+                Material::Glass { ior } => {
+                    let eta = if d.dot(hit.geometric_normal) < 0.0 {
+                        1.0 / ior
+                    } else {
+                        *ior
+                    };
+                    if rng.next_f32() < fresnel_dielectric(-d.dot(ns), eta) {
+                        reflect(d, ns)
+                    } else {
+                        refract(d, ns, eta).unwrap_or_else(|| reflect(d, ns))
+                    }
+                }
+            };
+            o = self.spawn(hit.position, ng, next);
+            d = next;
+        }
+        Vec3::ZERO
+    }
+}
+
+/// Geometric and shading normals turned towards the side `dir` arrives from.
+fn facing(hit: &Interaction, dir: Vec3) -> (Vec3, Vec3) {
+    if dir.dot(hit.geometric_normal) < 0.0 {
+        (hit.geometric_normal, hit.shading_normal)
+    } else {
+        (-hit.geometric_normal, -hit.shading_normal)
+    }
+}
