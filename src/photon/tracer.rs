@@ -165,7 +165,8 @@ fn trace_path(
         return stored;
     }
     let eps = world.ray_epsilon();
-    let (mut o, mut d) = (origin, direction);
+    // Start just off the light: the first ray would otherwise hit the light's own surface.
+    let (mut o, mut d) = (origin + direction * eps, direction);
     let mut specular_seen = false;
     let mut diffuse_seen = false;
     for _ in 0..MAX_BOUNCES {
