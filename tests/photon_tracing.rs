@@ -1,0 +1,777 @@
+//! Photon tracing and the photon map, checked against analytic answers and invariants: the
+//! irradiance and stored power under a point light, the focus of a glass ball lens, which
+//! maps exist, thread-count and power-scale invariance, and a clean Cornell box render.
+
+mod support;
+
+use dpm::estimate::{KnnEstimate, Query, RadialKernel, RadianceEstimate, Scratch};
+use dpm::photon::tracer::{MapKind, TraceCounts, trace_map};
+use dpm::photon::{Neighbours, PhotonMap};
+use dpm::render::PinholeCamera;
+use dpm::render::pipeline;
+use dpm::scene::Material;
+use dpm::world::{Surface, World};
+use glam::{DVec3, Vec3};
+use indicatif::ProgressBar;
+use std::f64::consts::PI;
+use support::*;
+
+fn trace(world: &World, kind: MapKind, target: usize, seed: u64) -> (PhotonMap, TraceCounts) {
+    in_pool(2, || {
+        trace_map(world, kind, target, seed, &ProgressBar::hidden())
+    })
+}
+
+const GLOBAL_ALL: MapKind = MapKind::Global { with_direct: true };
+
+/// A diffuse 4 × 4 quad at y = 0 (x, z in [-2, 2]) under `light` (TOML of one `[[lights]]`).
+fn plane_scene(light: &str, half: f64) -> String {
+    let (c, e) = (-half, 2.0 * half);
+    format!(
+        r#"
+[camera]
+position = [0.0, 2.5, 3.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 45.0
+resolution = [16, 12]
+
+[[lights]]
+{light}
+
+[materials.grey]
+type = "diffuse"
+albedo = [0.5, 0.5, 0.5]
+
+[[objects]]
+type = "quad"
+corner = [{c}, 0.0, {c}]
+edge_u = [0.0, 0.0, {e}]
+edge_v = [{e}, 0.0, 0.0]
+material = "grey"
+"#
+    )
+}
+
+const POINT_LIGHT: &str =
+    "type = \"point\"\nposition = [0.0, 1.0, 0.0]\npower = [100.0, 100.0, 100.0]";
+
+/// Fraction of an isotropic point source's power that crosses a `2a × 2b` rectangle centred
+/// under it at distance `h`: Ω / 4π with Ω = 4 asin(ab / √((a² + h²)(b² + h²))).
+fn rectangle_fraction(a: f64, b: f64, h: f64) -> f64 {
+    4.0 * (a * b / ((a * a + h * h) * (b * b + h * h)).sqrt()).asin() / (4.0 * PI)
+}
+
+/// Irradiance on the plane y = 0 at horizontal distance `rho` from the foot of a point light
+/// at height `h`: Φ/(4π) cos θ / d² = Φ/(4π) h / (h² + ρ²)^{3/2}.
+fn point_irradiance(phi: f64, h: f64, rho: f64) -> f64 {
+    phi / (4.0 * PI) * h / (h * h + rho * rho).powf(1.5)
+}
+
+/// The mean of [`point_irradiance`] over the disc of radius `r` centred at (x, z): midpoint rule
+/// on 32 equal-area rings × 64 angles (the integrand is smooth; error far below 1e-4).
+fn disc_mean_irradiance(phi: f64, h: f64, x: f64, z: f64, r: f64) -> f64 {
+    let (rings, angles) = (32, 64);
+    let mut sum = 0.0;
+    for i in 0..rings {
+        let rr = r * ((i as f64 + 0.5) / rings as f64).sqrt();
+        for j in 0..angles {
+            let a = 2.0 * PI * (j as f64 + 0.5) / angles as f64;
+            let (px, pz) = (x + rr * a.cos(), z + rr * a.sin());
+            sum += point_irradiance(phi, h, (px * px + pz * pz).sqrt());
+        }
+    }
+    sum / (rings * angles) as f64
+}
+
+// ---------------------------------------------------------------------------------------------
+// 4. Irradiance and stored power under a point light
+// ---------------------------------------------------------------------------------------------
+
+/// The global map (direct photons included) of scenes/point-plane.toml: Φ = 100 W, 1 m above
+/// a 4 × 4 plane; the plane alone cannot light itself, so every stored photon is a direct hit.
+///
+/// - The fraction of paths that store a photon is the solid-angle fraction of the quad seen
+///   from the light, Ω/4π = 4 asin(0.8)/4π = 0.29517: binomial, σ = √((1−p)/stored) = 0.38% at
+///   50 000 photons; tolerance 1.5%.
+/// - The total stored power is Φ Ω/4π: the same noise plus the shared-exponent rounding of a
+///   photon's power (every photon here has the same power, so that rounding, ≤ 0.4%, does not
+///   average out); tolerance 2%.
+/// - The simple k-NN estimate (k = 200) on an 11 × 11 grid over [-1, 1]² matches the analytic
+///   irradiance Φ cos θ/(4π d²), averaged over the estimate's own disc (radius: the distance
+///   to the k-th photon, which removes the bias a comparison with the point value would show
+///   where the irradiance curves). Its relative noise is 1/√(k − 2) = 7.1%; each point must be within
+///   30% (4σ), the mean of all 121 within 2.5%, the means of the inner (ρ ≤ 0.5) and outer
+///   (ρ ≥ 1) points within 4%, and the RMS deviation must not exceed 1.4/√(k − 2) (no excess
+///   noise).
+#[test]
+fn point_light_irradiance_and_stored_power_match_the_analytic_values() {
+    let text = std::fs::read_to_string(repo_path("scenes/point-plane.toml")).unwrap();
+    let world = world(&text);
+    let target = 50_000;
+    let (map, counts) = trace(&world, GLOBAL_ALL, target, 11);
+    assert_eq!(counts.stored as usize, target);
+    assert_eq!(map.len(), target);
+    assert_eq!(map.emitted, counts.emitted);
+
+    let (phi, h) = (100.0, 1.0);
+    let p = rectangle_fraction(2.0, 2.0, h);
+    assert!((p - 0.29517).abs() < 1e-4);
+    let fraction = counts.stored as f64 / counts.emitted as f64;
+    assert!(
+        rel_err(fraction, p) < 0.015,
+        "stored/emitted {fraction} vs Ω/4π {p}"
+    );
+    let total = dvec(map.total_power());
+    for c in 0..3 {
+        assert!(
+            rel_err(total[c], phi * p) < 0.02,
+            "stored power {total} vs Φ Ω/4π {}",
+            phi * p
+        );
+    }
+    for photon in map.photons() {
+        let x = photon.position();
+        assert!(x.y.abs() < 1e-5 && x.x.abs() <= 2.0 && x.z.abs() <= 2.0);
+        assert!(
+            photon.normal().dot(Vec3::Y) > 0.999,
+            "normal faces the light"
+        );
+        assert!(photon.direction().y < 0.0, "photons travel down");
+    }
+
+    let k = 200;
+    let estimate = KnnEstimate::new(RadialKernel::Constant, k, None);
+    let mut scratch = Scratch::default();
+    let mut found = Neighbours::default();
+    let (mut all, mut inner, mut outer) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..11 {
+        for j in 0..11 {
+            let (x, z) = (-1.0 + 0.2 * i as f64, -1.0 + 0.2 * j as f64);
+            let q = Vec3::new(x as f32, 0.0, z as f32);
+            let query = Query {
+                position: q,
+                normal: Vec3::Y,
+            };
+            let got = estimate.irradiance(&map, &query, &mut scratch).x as f64;
+            map.tree().k_nearest(q, k, f32::INFINITY, &mut found);
+            let r = (found.farthest().unwrap().dist2 as f64).sqrt();
+            let want = disc_mean_irradiance(phi, h, x, z, r);
+            let ratio = got / want;
+            assert!(
+                (ratio - 1.0).abs() < 0.3,
+                "at ({x:.1}, {z:.1}): estimate {got} vs analytic {want} (point value {})",
+                point_irradiance(phi, h, x.hypot(z))
+            );
+            all.push(ratio);
+            let rho = x.hypot(z);
+            if rho <= 0.5 + 1e-9 {
+                inner.push(ratio);
+            } else if rho >= 1.0 - 1e-9 {
+                outer.push(ratio);
+            }
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let rms = (all.iter().map(|r| (r - 1.0).powi(2)).sum::<f64>() / all.len() as f64).sqrt();
+    eprintln!(
+        "mean {:.4}, inner {:.4} ({}), outer {:.4} ({}), rms {rms:.4}",
+        mean(&all),
+        mean(&inner),
+        inner.len(),
+        mean(&outer),
+        outer.len()
+    );
+    assert!(
+        (mean(&all) - 1.0).abs() < 0.025,
+        "mean ratio {}",
+        mean(&all)
+    );
+    assert!(
+        (mean(&inner) - 1.0).abs() < 0.04,
+        "inner mean {}",
+        mean(&inner)
+    );
+    assert!(
+        (mean(&outer) - 1.0).abs() < 0.04,
+        "outer mean {}",
+        mean(&outer)
+    );
+    assert!(
+        rms < 1.4 / ((k - 2) as f64).sqrt(),
+        "relative RMS deviation {rms}"
+    );
+}
+
+/// Checks the fraction of paths that store a photon, and the stored power, on a lone plane.
+fn assert_stored_power(text: &str, phi: f64, fraction: f64, target: usize, tolerance: f64) {
+    let world = world(text);
+    let (map, counts) = trace(&world, GLOBAL_ALL, target, 5);
+    let got = counts.stored as f64 / counts.emitted.max(1) as f64;
+    let total = dvec(map.total_power());
+    eprintln!("{counts:?}: stored/emitted {got}, stored power {total}");
+    assert!(
+        rel_err(got, fraction) < tolerance,
+        "stored/emitted {got} ({counts:?}) vs the analytic fraction {fraction}"
+    );
+    assert!(
+        rel_err(total.x, phi * fraction) < tolerance + 0.004,
+        "stored power {total} vs {}",
+        phi * fraction
+    );
+}
+
+/// A sphere light (radius 0.05) in place of the point light: a uniformly emitting sphere
+/// gives every point that sees all of it the irradiance of a point light at its centre, so
+/// the plane receives the same fraction Ω/4π = 0.29517 of its power. 10 000 photons: σ =
+/// 0.85%; tolerance 3.5%.
+#[test]
+#[ignore = "bug: about half the photons leaving a sphere light hit the light itself (src/photon/tracer.rs trace_path)"]
+fn sphere_light_photons_reach_the_plane() {
+    let light =
+        "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 0.05\npower = [100.0, 100.0, 100.0]";
+    let p = rectangle_fraction(2.0, 2.0, 1.0);
+    assert_stored_power(&plane_scene(light, 2.0), 100.0, p, 10_000, 0.035);
+}
+
+/// A 0.5 × 0.5 quad light facing down 1 m above a 200 × 200 plane: a Lambertian emitter sends
+/// all but about (1/100)² of its power into the plane, so nearly every path stores a photon
+/// and the stored power is Φ; tolerance 1%.
+#[test]
+#[ignore = "bug: every photon leaving a quad light hits the light itself at t = 0 (src/photon/tracer.rs trace_path)"]
+fn quad_light_photons_reach_the_plane() {
+    let light = "type = \"quad\"\ncorner = [-0.25, 1.0, -0.25]\nedge_u = [0.5, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.5]\npower = [100.0, 100.0, 100.0]";
+    assert_stored_power(&plane_scene(light, 100.0), 100.0, 1.0, 5_000, 0.01);
+}
+
+/// The point light over a 200 × 200 plane sends (almost exactly) half its power down:
+/// Ω/4π = 0.49502 for this plane; 20 000 photons, σ = 0.7%; tolerance 3%.
+#[test]
+fn point_light_sends_half_its_power_into_a_huge_plane() {
+    let p = rectangle_fraction(100.0, 100.0, 1.0);
+    assert!((p - 0.5).abs() < 0.01);
+    assert_stored_power(&plane_scene(POINT_LIGHT, 100.0), 100.0, p, 20_000, 0.03);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 5. The caustic of a glass ball lens
+// ---------------------------------------------------------------------------------------------
+
+/// A glass ball lens (radius R = 0.5, n = 1.5, centre C) lit by a point light on a tilted axis
+/// u (30° from vertical), at distance s = 5 from C, through a square hole (half-width 0.1) in
+/// a black plate just above the ball, perpendicular to u. The hole keeps the rays paraxial, so
+/// the spherical aberration of the ball is small and the light focuses where the thick-lens
+/// formula puts it: a ball's principal planes both pass through its centre and its focal
+/// length is f = nR / (2(n − 1)) = 0.75, so 1/s + 1/s' = 1/f gives s' = sf/(s − f) = 0.8824
+/// beyond C, at F = C − s' u. The receiving plane is horizontal, through F (or 0.2 above
+/// or below it).
+struct BallLens {
+    centre: DVec3,
+    axis: DVec3,
+    light: DVec3,
+    focus: DVec3,
+    hole_centre: DVec3,
+    hole_e1: DVec3,
+    hole_e2: DVec3,
+}
+
+const BALL_R: f64 = 0.5;
+const BALL_N: f64 = 1.5;
+const BALL_S: f64 = 5.0;
+const HOLE: f64 = 0.1;
+const PLATE: f64 = 1.2;
+const LENS_POWER: f64 = 1000.0;
+
+impl BallLens {
+    fn new() -> Self {
+        let centre = DVec3::new(0.0, 1.5, 0.0);
+        let tilt = 30f64.to_radians();
+        let axis = DVec3::new(tilt.sin(), tilt.cos(), 0.0);
+        let f = BALL_N * BALL_R / (2.0 * (BALL_N - 1.0));
+        let s_image = BALL_S * f / (BALL_S - f);
+        Self {
+            centre,
+            axis,
+            light: centre + BALL_S * axis,
+            focus: centre - s_image * axis,
+            hole_centre: centre + 0.7 * axis,
+            hole_e1: DVec3::new(tilt.cos(), -tilt.sin(), 0.0),
+            hole_e2: DVec3::Z,
+        }
+    }
+
+    fn scene(&self, plane_y: f64) -> String {
+        let v = |p: DVec3| format!("[{}, {}, {}]", p.x, p.y, p.z);
+        let (o, e1, e2) = (self.hole_centre, self.hole_e1, self.hole_e2);
+        let (w, a) = (PLATE, HOLE);
+        // Four plate quads around the square hole: (corner, edge_u, edge_v).
+        let plates = [
+            (o - w * e1 + a * e2, 2.0 * w * e1, (w - a) * e2),
+            (o - w * e1 - w * e2, 2.0 * w * e1, (w - a) * e2),
+            (o - w * e1 - a * e2, (w - a) * e1, 2.0 * a * e2),
+            (o + a * e1 - a * e2, (w - a) * e1, 2.0 * a * e2),
+        ];
+        let mut text = format!(
+            r#"
+[camera]
+position = [0.0, 4.0, 4.0]
+look_at = [0.0, 0.7, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 40.0
+resolution = [16, 16]
+
+[[lights]]
+type = "point"
+position = {light}
+power = [{LENS_POWER}, {LENS_POWER}, {LENS_POWER}]
+
+[materials.glass]
+type = "glass"
+ior = {BALL_N}
+
+[materials.black]
+type = "diffuse"
+albedo = [0.0, 0.0, 0.0]
+
+[materials.floor]
+type = "diffuse"
+albedo = [0.75, 0.75, 0.75]
+
+[[objects]]
+type = "sphere"
+center = {centre}
+radius = {BALL_R}
+material = "glass"
+
+[[objects]]
+type = "quad"
+corner = [-3.0, {plane_y}, -3.0]
+edge_u = [0.0, 0.0, 6.0]
+edge_v = [6.0, 0.0, 0.0]
+material = "floor"
+"#,
+            light = v(self.light),
+            centre = v(self.centre),
+        );
+        for (c, eu, ev) in plates {
+            text += &format!(
+                "\n[[objects]]\ntype = \"quad\"\ncorner = {}\nedge_u = {}\nedge_v = {}\nmaterial = \"black\"\n",
+                v(c),
+                v(eu),
+                v(ev)
+            );
+        }
+        text
+    }
+
+    /// Rays from the light through an `n × n` grid of cells of the hole, refracted into and out
+    /// of the ball (Snell, f64): where they cross the plane y = `plane_y`, with the power each
+    /// carries there (Φ/4π dΩ, times the Fresnel transmittance of both surfaces).
+    fn exact_spot(&self, plane_y: f64, n: usize) -> Vec<(DVec3, f64)> {
+        let mut out = Vec::with_capacity(n * n);
+        let dist = (self.hole_centre - self.light).length();
+        let cell = 2.0 * HOLE / n as f64;
+        for i in 0..n {
+            for j in 0..n {
+                let s = -HOLE + (i as f64 + 0.5) * cell;
+                let t = -HOLE + (j as f64 + 0.5) * cell;
+                let p = self.hole_centre + s * self.hole_e1 + t * self.hole_e2;
+                let r = p - self.light;
+                let d_omega = cell * cell * dist / r.length().powi(3);
+                let d = r.normalize();
+                // Entry.
+                let oc = self.light - self.centre;
+                let b = oc.dot(d);
+                let c = oc.length_squared() - BALL_R * BALL_R;
+                let t1 = -b - (b * b - c).sqrt();
+                let x1 = self.light + t1 * d;
+                let n1 = (x1 - self.centre) / BALL_R;
+                let f1 = fresnel(-d.dot(n1), 1.0, BALL_N);
+                let d1 = refract(d, n1, 1.0 / BALL_N).unwrap();
+                // Exit.
+                let x2 = x1 - 2.0 * (x1 - self.centre).dot(d1) * d1;
+                let n2 = -(x2 - self.centre) / BALL_R;
+                let f2 = fresnel(-d1.dot(n2), BALL_N, 1.0);
+                let d2 = refract(d1, n2, BALL_N).unwrap();
+                let hit = x2 + (plane_y - x2.y) / d2.y * d2;
+                out.push((
+                    hit,
+                    LENS_POWER / (4.0 * PI) * d_omega * (1.0 - f1) * (1.0 - f2),
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// Caustic photons on the receiving plane within `window` of `around`: (position, power).
+fn photons_near(map: &PhotonMap, plane_y: f64, around: DVec3, window: f64) -> Vec<(DVec3, f64)> {
+    map.photons()
+        .iter()
+        .map(|p| (dvec(p.position()), p.power().x as f64))
+        .filter(|(x, _)| (x.y - plane_y).abs() < 1e-4 && (*x - around).length() < window)
+        .collect()
+}
+
+fn centroid(spot: &[(DVec3, f64)]) -> (DVec3, f64) {
+    let power: f64 = spot.iter().map(|s| s.1).sum();
+    (
+        spot.iter().map(|(x, w)| *x * *w).sum::<DVec3>() / power,
+        power,
+    )
+}
+
+/// Fraction of the power within `radius` of `centre`.
+fn encircled(spot: &[(DVec3, f64)], centre: DVec3, radius: f64) -> f64 {
+    let total: f64 = spot.iter().map(|s| s.1).sum();
+    let inside: f64 = spot
+        .iter()
+        .filter(|(x, _)| (*x - centre).length() < radius)
+        .map(|s| s.1)
+        .sum();
+    inside / total
+}
+
+/// The caustic of the ball lens (see [`BallLens`]) falls where geometric optics focuses it.
+///
+/// - Model check: the f64 rays through the hole land, power-weighted, within 0.001 of the
+///   paraxial focus F (seen: 7e-5), with over 90% of their power within 0.01 of it (seen:
+///   100%); 0.2 above or below F they spread (under 20% within 0.01; seen: 7%).
+/// - The caustic photons within 0.1 of F carry Φ/4π · Ω_hole · T₁T₂ (the power through the
+///   hole, less the Fresnel reflections of both surfaces, 7.8%): 20 000 photons, binomial
+///   σ ≈ 0.8%, plus ≤ 0.4% from the shared-exponent rounding; tolerance 3%.
+/// - Their power-weighted centroid lies within 0.002 of the rays' (seen: 2e-5 at F, 6e-4 off
+///   it), so within 0.003 of F, which lies 0.44 sideways of the ball's centre; over 90% of
+///   their power lies within 0.01 of F (seen: 100%), and on the planes 0.2 above and below F
+///   under 20% (seen: 7%): the focus is at F's height, as the lens formula says.
+/// - The k-NN estimate (k = 50) at F exceeds the one 2.5 radii away on the plane by over 1000×
+///   (seen: 10¹³×: only stray reflections land there).
+#[test]
+fn glass_ball_focuses_the_caustic_where_the_lens_formula_says() {
+    let lens = BallLens::new();
+    let f = lens.focus;
+    assert!(
+        (f - DVec3::new(-0.441176, 0.735864, 0.0)).length() < 1e-5,
+        "{f}"
+    );
+
+    for (dy, in_focus) in [(0.0, true), (0.2, false), (-0.2, false)] {
+        let plane_y = f.y + dy;
+        // Where the axis meets this plane: the centre of the spot.
+        let on_axis = f + dy / lens.axis.y * lens.axis;
+        let rays = lens.exact_spot(plane_y, 100);
+        let (ray_centre, ray_power) = centroid(&rays);
+        let ray_focus = encircled(&rays, on_axis, 0.01);
+        if in_focus {
+            assert!((ray_centre - f).length() < 0.001, "{ray_centre} vs F {f}");
+            assert!(ray_focus > 0.9, "rays within 0.01 of F: {ray_focus}");
+        } else {
+            assert!(ray_focus < 0.2, "rays within 0.01 at {dy}: {ray_focus}");
+        }
+
+        let world = world(&lens.scene(plane_y));
+        let target = if in_focus { 20_000 } else { 5_000 };
+        let (map, counts) = trace(&world, MapKind::Caustic, target, 3);
+        assert_eq!(counts.stored as usize, target);
+        let spot = photons_near(&map, plane_y, on_axis, 0.1);
+        let (centre, power) = centroid(&spot);
+        let focused = encircled(&spot, on_axis, 0.01);
+        eprintln!(
+            "plane {dy:+}: {counts:?}, {} photons in the window, power {power:.5} (rays {ray_power:.5}), centroid {centre} (rays {ray_centre}), within 0.01: {focused:.3} (rays {ray_focus:.3})",
+            spot.len()
+        );
+        assert!(
+            (centre - ray_centre).length() < 0.002,
+            "centroid {centre} vs the rays' {ray_centre}"
+        );
+        if in_focus {
+            assert!(
+                rel_err(power, ray_power) < 0.03,
+                "power in the spot {power} vs {ray_power}"
+            );
+            assert!(focused > 0.9, "photons within 0.01 of F: {focused}");
+            let estimate = KnnEstimate::new(RadialKernel::Constant, 50, None);
+            let mut scratch = Scratch::default();
+            let mut at = |p: DVec3| {
+                let q = Query {
+                    position: p.as_vec3(),
+                    normal: Vec3::Y,
+                };
+                estimate.irradiance(&map, &q, &mut scratch).x as f64
+            };
+            let peak = at(f);
+            let away = at(f + DVec3::new(0.0, 0.0, 2.5 * BALL_R));
+            eprintln!("estimate at F {peak}, 2.5 R away {away}");
+            assert!(peak > 1000.0 * away, "at F {peak}, 2.5 R away {away}");
+        } else {
+            assert!(focused < 0.2, "photons within 0.01 at {dy}: {focused}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 6. Which maps exist, and their counts
+// ---------------------------------------------------------------------------------------------
+
+/// Without a mirror or glass object there are no caustic photons: `dpm render` builds no caustic
+/// map (nor a global map for a lone plane); traced anyway, the caustic map stays empty after
+/// the path limit (1 000 000 paths), as does a global map of indirect photons only (a lone
+/// plane cannot light itself).
+#[test]
+fn diffuse_only_scenes_have_no_caustic_photons() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = scene_with_resolution("scenes/point-plane.toml", 16, 12);
+    let scene = write_scene(dir.path(), "plane.toml", &text);
+    let out = dir.path().join("plane.pfm");
+    let outcome = pipeline::run(&render_args(&[
+        path_str(&scene),
+        "-o",
+        path_str(&out),
+        "--threads",
+        "2",
+    ]))
+    .expect("render");
+    assert!(
+        outcome.caustic.is_none(),
+        "no caustic map without specular objects"
+    );
+    assert!(outcome.global.is_none(), "no global map for a lone plane");
+    assert!(outcome.estimator.is_none());
+
+    let world = world(&text);
+    assert!(!world.has_specular());
+    for kind in [MapKind::Caustic, MapKind::Global { with_direct: false }] {
+        let (map, counts) = trace(&world, kind, 100, 1);
+        assert!(map.is_empty(), "{kind:?}");
+        assert_eq!(counts.stored, 0, "{kind:?}");
+        assert_eq!(
+            counts.emitted, 1_000_000,
+            "{kind:?}: traced to the path limit"
+        );
+    }
+}
+
+/// The box with the mirror and glass spheres: the caustic map reaches its target exactly, with
+/// at least as many paths as photons (a caustic path stores at most once), every photon on a
+/// wall, with positive power; the global map (every diffuse hit) reaches its target too, and
+/// may store several photons a path. The counts agree with the maps.
+#[test]
+fn map_counts_reach_the_target() {
+    let world = world(&cornell_point_light(8, 8));
+    assert!(world.has_specular());
+    let (caustic, c) = trace(&world, MapKind::Caustic, 5_000, 2);
+    assert_eq!(c.stored, 5_000);
+    assert!(c.emitted >= c.stored, "{c:?}");
+    assert_eq!(
+        (caustic.len() as u64, caustic.emitted),
+        (c.stored, c.emitted)
+    );
+    let (global, g) = trace(&world, GLOBAL_ALL, 5_000, 2);
+    assert_eq!(g.stored, 5_000);
+    assert_eq!((global.len() as u64, global.emitted), (g.stored, g.emitted));
+    assert!(
+        g.emitted < g.stored,
+        "photons bounce between the walls: {g:?}"
+    );
+    for photon in caustic.photons().iter().chain(global.photons()) {
+        let x = photon.position();
+        let on_wall = x.y.abs() < 1e-4
+            || (x.y - 2.0).abs() < 1e-4
+            || (x.z + 1.0).abs() < 1e-4
+            || (x.x.abs() - 1.0).abs() < 1e-4;
+        assert!(on_wall, "photon at {x} is not on a wall");
+        let p = photon.power();
+        assert!(p.min_element() >= 0.0 && p.max_element() > 0.0 && p.is_finite());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 7. The maps do not depend on the thread count
+// ---------------------------------------------------------------------------------------------
+
+/// The same seed gives the same photons, in the same order, on 1 and 2 threads, for every kind
+/// of map; the targets are large enough that each pass takes more than one batch of paths.
+#[test]
+fn maps_are_identical_on_one_and_two_threads() {
+    let world = world(&cornell_point_light(8, 8));
+    for (kind, target) in [
+        (MapKind::Caustic, 20_000),
+        (GLOBAL_ALL, 40_000),
+        (MapKind::Global { with_direct: false }, 20_000),
+    ] {
+        let run = |threads| {
+            in_pool(threads, || {
+                trace_map(&world, kind, target, 9, &ProgressBar::hidden())
+            })
+        };
+        let (one, c1) = run(1);
+        let (two, c2) = run(2);
+        assert!(c1.emitted > 16_384, "{kind:?} took one batch only: {c1:?}");
+        assert_eq!(c1, c2, "{kind:?}");
+        assert_eq!(one.len(), target);
+        assert!(one.photons() == two.photons(), "{kind:?}: photons differ");
+        let (other, _) = in_pool(2, || {
+            trace_map(&world, kind, target, 10, &ProgressBar::hidden())
+        });
+        assert!(one.photons() != other.photons(), "{kind:?}: seed ignored");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8. Light power scales photon power only
+// ---------------------------------------------------------------------------------------------
+
+/// A light 1000× as powerful gives the same paths: positions, directions and normals identical,
+/// every photon's power 1000× (within the shared-exponent rounding of both: half a step of
+/// each, at most 1/256 of the largest channel each, so 2/256 in all).
+#[test]
+fn scaling_the_light_power_scales_every_photon() {
+    let text = cornell_point_light(8, 8);
+    let bright_text = text.replace(
+        "power = [40.0, 36.0, 30.0]",
+        "power = [40000.0, 36000.0, 30000.0]",
+    );
+    assert_ne!(text, bright_text);
+    let (dim, bright) = (world(&text), world(&bright_text));
+    for kind in [MapKind::Caustic, GLOBAL_ALL] {
+        let (a, ca) = trace(&dim, kind, 10_000, 4);
+        let (b, cb) = trace(&bright, kind, 10_000, 4);
+        assert_eq!(ca, cb, "{kind:?}");
+        for (p, q) in a.photons().iter().zip(b.photons()) {
+            assert_eq!(p.position(), q.position());
+            assert_eq!(p.direction(), q.direction());
+            assert_eq!(p.normal(), q.normal());
+            let (pa, pb) = (p.power() * 1000.0, q.power());
+            let scale = pa.max_element().max(pb.max_element());
+            assert!(
+                (pa - pb).abs().max_element() <= scale * 2.0 / 256.0,
+                "{kind:?}: 1000 × {} vs {}",
+                p.power(),
+                q.power()
+            );
+        }
+        let ratio = dvec(b.total_power()) / dvec(a.total_power());
+        assert!(
+            (ratio - DVec3::splat(1000.0)).abs().max_element() < 1000.0 / 256.0,
+            "{ratio}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 9. The Cornell box renders cleanly
+// ---------------------------------------------------------------------------------------------
+
+fn render_cornell(text: &str, extra: &[&str]) -> pipeline::RenderOutcome {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "cornell.toml", text);
+    let out = dir.path().join("cornell.pfm");
+    let mut args = vec![
+        path_str(&scene),
+        "-o",
+        path_str(&out),
+        "--threads",
+        "2",
+        "--caustic-photons",
+        "4000",
+        "--k",
+        "100",
+    ];
+    args.extend_from_slice(extra);
+    pipeline::run(&render_args(&args)).expect("render")
+}
+
+/// First hits of the pixel-centre rays that land on a diffuse surface.
+fn diffuse_first_hits(world: &World) -> Vec<(usize, usize)> {
+    let cam = &world.description.camera;
+    let camera = PinholeCamera::new(cam);
+    let mut out = Vec::new();
+    for y in 0..cam.height as usize {
+        for x in 0..cam.width as usize {
+            let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+            if let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY) {
+                if let Surface::Material(m) = hit.surface {
+                    if matches!(world.material(m), Material::Diffuse { .. }) {
+                        out.push((x, y));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Renders the box with final gathering and without a global map: every pixel is finite and
+/// non-negative in both; where the eye ray first meets a diffuse wall, final gathering only
+/// adds light (direct light and the caustic estimate draw the same numbers in both renders,
+/// and indirect light is never negative), and it adds a good share on average (the walls
+/// light each other). Returns the gathered render.
+fn assert_clean_cornell_render(text: &str) -> pipeline::RenderOutcome {
+    let gathered = render_cornell(
+        text,
+        &[
+            "--global-photons",
+            "4000",
+            "--final-gather",
+            "8",
+            "--global-k",
+            "50",
+        ],
+    );
+    let direct = render_cornell(text, &["--global-photons", "0"]);
+    assert_eq!(gathered.caustic.map(|c| c.stored), Some(4000));
+    assert_eq!(gathered.global.map(|c| c.stored), Some(4000));
+    assert!(direct.global.is_none());
+    for outcome in [&gathered, &direct] {
+        for (i, p) in outcome.image.pixels.iter().enumerate() {
+            assert!(p.is_finite() && p.min_element() >= 0.0, "pixel {i} is {p}");
+        }
+    }
+    let world = world(text);
+    let diffuse = diffuse_first_hits(&world);
+    assert!(diffuse.len() > outcome_pixels(&direct) / 2);
+    let (mut sum_g, mut sum_d) = (0.0, 0.0);
+    for &(x, y) in &diffuse {
+        let (g, d) = (gathered.image.get(x, y), direct.image.get(x, y));
+        assert!(
+            (g - d).min_element() >= -1e-6 * d.max_element(),
+            "pixel ({x}, {y}): gathered {g} < direct {d}"
+        );
+        sum_g += g.element_sum() as f64;
+        sum_d += d.element_sum() as f64;
+    }
+    eprintln!("indirect share {:.3}", 1.0 - sum_d / sum_g);
+    assert!(
+        sum_g > 1.1 * sum_d,
+        "indirect light adds {sum_g} vs {sum_d}"
+    );
+    gathered
+}
+
+fn outcome_pixels(o: &pipeline::RenderOutcome) -> usize {
+    o.image.width * o.image.height
+}
+
+/// The box lit by a point light (see `support::cornell_point_light`).
+#[test]
+fn cornell_box_renders_without_nan_or_negative_pixels() {
+    assert_clean_cornell_render(&cornell_point_light(32, 32));
+}
+
+/// The committed box with its quad light; the light itself is seen by some pixel, with its
+/// radiance Φ/(πA).
+#[test]
+#[ignore = "bug: photons leaving a quad light hit the light itself (src/photon/tracer.rs trace_path), so both maps stay empty"]
+fn committed_cornell_box_renders_without_nan_or_negative_pixels() {
+    let text = scene_with_resolution("scenes/cornell-box.toml", 32, 32);
+    let outcome = assert_clean_cornell_render(&text);
+    let le = Vec3::new(40.0, 36.0, 30.0) / (std::f32::consts::PI * 0.25);
+    assert!(
+        outcome
+            .image
+            .pixels
+            .iter()
+            .any(|p| (*p - le).abs().max_element() < 1e-4 * le.max_element()),
+        "no pixel shows the light's radiance {le}"
+    );
+}
