@@ -226,7 +226,6 @@ fn assert_stored_power(text: &str, phi: f64, fraction: f64, target: usize, toler
 /// the plane receives the same fraction Ω/4π = 0.29517 of its power. 10 000 photons: σ =
 /// 0.85%; tolerance 3.5%.
 #[test]
-#[ignore = "bug: about half the photons leaving a sphere light hit the light itself (src/photon/tracer.rs trace_path)"]
 fn sphere_light_photons_reach_the_plane() {
     let light =
         "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 0.05\npower = [100.0, 100.0, 100.0]";
@@ -238,7 +237,6 @@ fn sphere_light_photons_reach_the_plane() {
 /// all but about (1/100)² of its power into the plane, so nearly every path stores a photon
 /// and the stored power is Φ; tolerance 1%.
 #[test]
-#[ignore = "bug: every photon leaving a quad light hits the light itself at t = 0 (src/photon/tracer.rs trace_path)"]
 fn quad_light_photons_reach_the_plane() {
     let light = "type = \"quad\"\ncorner = [-0.25, 1.0, -0.25]\nedge_u = [0.5, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.5]\npower = [100.0, 100.0, 100.0]";
     assert_stored_power(&plane_scene(light, 100.0), 100.0, 1.0, 5_000, 0.01);
@@ -761,7 +759,6 @@ fn cornell_box_renders_without_nan_or_negative_pixels() {
 /// The committed box with its quad light; the light itself is seen by some pixel, with its
 /// radiance Φ/(πA).
 #[test]
-#[ignore = "bug: photons leaving a quad light hit the light itself (src/photon/tracer.rs trace_path), so both maps stay empty"]
 fn committed_cornell_box_renders_without_nan_or_negative_pixels() {
     let text = scene_with_resolution("scenes/cornell-box.toml", 32, 32);
     let outcome = assert_clean_cornell_render(&text);

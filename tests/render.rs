@@ -401,7 +401,6 @@ fn same_seed_same_bytes_on_one_and_two_threads() {
 
 /// The same with the committed Cornell box and its quad light.
 #[test]
-#[ignore = "bug: photons leaving a quad light hit the light itself (src/photon/tracer.rs trace_path), so both maps stay empty"]
 fn same_seed_same_bytes_on_one_and_two_threads_committed_cornell_box() {
     assert_deterministic(&scene_with_resolution("scenes/cornell-box.toml", 24, 20));
 }
