@@ -49,7 +49,7 @@ impl Photon {
 pub fn encode_rgbe(c: Vec3) -> [u8; 4] {
     let c = c.max(Vec3::ZERO);
     let m = c.max_element();
-    if !(m > 1e-38) || !m.is_finite() {
+    if m.is_nan() || m <= 1e-38 || !m.is_finite() {
         return [0; 4];
     }
     // m = f * 2^e with f in [0.5, 1)

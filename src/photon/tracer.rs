@@ -62,7 +62,7 @@ impl LightChooser {
             .map(|l| lights::weight(lights::power(l)))
             .collect();
         let total: f32 = w.iter().sum();
-        if !(total > 0.0) || !total.is_finite() {
+        if total.is_nan() || total <= 0.0 || !total.is_finite() {
             return None;
         }
         let pdf: Vec<f32> = w.iter().map(|x| x / total).collect();
