@@ -78,6 +78,11 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub estimate: EstimatorSettings,
 
+    /// Also write the diffusion kernel's shape at each pixel's first diffuse hit (hue = edge
+    /// direction, brightness = 1 − λ2), like the paper's Figure 2b. Needs --estimator diffusion.
+    #[arg(long)]
+    pub kernel_field: Option<PathBuf>,
+
     /// Write the per-phase times and counts as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
@@ -147,6 +152,12 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
             "--spp 0: at least one sample per pixel".into(),
         ));
     }
+    if let Some(path) = &args.kernel_field {
+        if args.estimate.estimator != EstimatorKind::Diffusion {
+            return Err(RenderError::Invalid("--kernel-field needs --estimator diffusion".into()));
+        }
+        ImageFormat::from_path(path)?;
+    }
     if args.global_k < 2 {
         return Err(RenderError::Invalid(format!(
             "--global-k {}: must be at least 2",
@@ -214,6 +225,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     // The caustic estimate; the diffusion estimate's gradient pass is its own phase.
     let mut caustic_map = caustic;
     let mut estimator = None;
+    let mut diffusion = None;
     let caustic_estimate: Option<Box<dyn RadianceEstimate>> = match caustic_map.as_mut() {
         Some((map, _)) if !map.is_empty() => {
             let resolved = args.estimate.resolve(map)?;
@@ -223,6 +235,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
             {
                 let start = Instant::now();
                 gradient_pass(map, d.gradient_radius());
+                diffusion = Some(*d);
                 times.record(
                     "gradient pass",
                     start.elapsed(),
