@@ -23,7 +23,11 @@ pub struct Image {
 impl Image {
     /// A black image.
     pub fn new(width: usize, height: usize) -> Self {
-        Self { width, height, pixels: vec![Vec3::ZERO; width * height] }
+        Self {
+            width,
+            height,
+            pixels: vec![Vec3::ZERO; width * height],
+        }
     }
 
     /// An image whose pixel at column `x`, row `y` (0 = top) is `f(x, y)`.
@@ -34,13 +38,21 @@ impl Image {
                 pixels.push(f(x, y));
             }
         }
-        Self { width, height, pixels }
+        Self {
+            width,
+            height,
+            pixels,
+        }
     }
 
     /// A grey image from one value a pixel (row 0 = top).
     pub fn from_grey(width: usize, height: usize, values: &[f32]) -> Self {
         assert_eq!(values.len(), width * height, "one value a pixel");
-        Self { width, height, pixels: values.iter().map(|&v| Vec3::splat(v)).collect() }
+        Self {
+            width,
+            height,
+            pixels: values.iter().map(|&v| Vec3::splat(v)).collect(),
+        }
     }
 
     pub fn get(&self, x: usize, y: usize) -> Vec3 {
@@ -63,7 +75,10 @@ pub enum ImageFormat {
 impl ImageFormat {
     /// The format for `path`'s extension (case-insensitive).
     pub fn from_path(path: &Path) -> Result<Self, ImageError> {
-        let ext = path.extension().and_then(OsStr::to_str).map(str::to_ascii_lowercase);
+        let ext = path
+            .extension()
+            .and_then(OsStr::to_str)
+            .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("png") => Ok(Self::Png),
             Some("exr") => Ok(Self::Exr),
@@ -104,7 +119,11 @@ pub struct WriteOptions {
 
 impl Default for WriteOptions {
     fn default() -> Self {
-        Self { exposure: 0.0, exr_precision: ExrPrecision::F32, non_finite: NonFinitePolicy::Reject }
+        Self {
+            exposure: 0.0,
+            exr_precision: ExrPrecision::F32,
+            non_finite: NonFinitePolicy::Reject,
+        }
     }
 }
 
@@ -115,9 +134,20 @@ pub enum ImageError {
     #[error("{path}: output directory {dir} does not exist")]
     MissingDirectory { path: PathBuf, dir: PathBuf },
     #[error("{path}: pixel ({x}, {y}) is not finite ({value}); {count} non-finite pixels in all")]
-    NonFinite { path: PathBuf, x: usize, y: usize, value: Vec3, count: usize },
+    NonFinite {
+        path: PathBuf,
+        x: usize,
+        y: usize,
+        value: Vec3,
+        count: usize,
+    },
     #[error("{path}: image is {width}x{height} but holds {pixels} pixels")]
-    BadDimensions { path: PathBuf, width: usize, height: usize, pixels: usize },
+    BadDimensions {
+        path: PathBuf,
+        width: usize,
+        height: usize,
+        pixels: usize,
+    },
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: io::Error },
     #[error("{path}: {message}")]
@@ -138,7 +168,11 @@ pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result
         });
     }
     let pixels = finite_pixels(path, image, options.non_finite)?;
-    let image = Image { width: image.width, height: image.height, pixels };
+    let image = Image {
+        width: image.width,
+        height: image.height,
+        pixels,
+    };
     write_atomically(path, |out| match format {
         ImageFormat::Pfm => encode_pfm(&image, out),
         ImageFormat::Png => encode_png(&image, options.exposure, out),
@@ -146,7 +180,11 @@ pub fn write_image(path: &Path, image: &Image, options: &WriteOptions) -> Result
     })
 }
 
-fn finite_pixels(path: &Path, image: &Image, policy: NonFinitePolicy) -> Result<Vec<Vec3>, ImageError> {
+fn finite_pixels(
+    path: &Path,
+    image: &Image,
+    policy: NonFinitePolicy,
+) -> Result<Vec<Vec3>, ImageError> {
     let mut first = None;
     let mut count = 0;
     let pixels = image
@@ -180,18 +218,27 @@ pub fn write_atomically(
     path: &Path,
     encode: impl FnOnce(&mut BufWriter<File>) -> Result<(), String>,
 ) -> Result<(), ImageError> {
-    let io_error = |source| ImageError::Io { path: path.to_path_buf(), source };
+    let io_error = |source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
     if !dir.is_dir() {
-        return Err(ImageError::MissingDirectory { path: path.to_path_buf(), dir });
+        return Err(ImageError::MissingDirectory {
+            path: path.to_path_buf(),
+            dir,
+        });
     }
     let (temp_path, file) = create_temp_file(&dir, path).map_err(io_error)?;
     let result = (|| {
         let mut out = BufWriter::new(file);
-        encode(&mut out).map_err(|message| ImageError::Encode { path: path.to_path_buf(), message })?;
+        encode(&mut out).map_err(|message| ImageError::Encode {
+            path: path.to_path_buf(),
+            message,
+        })?;
         let file = out.into_inner().map_err(|e| io_error(e.into_error()))?;
         file.sync_all().map_err(io_error)?;
         drop(file);
@@ -241,20 +288,36 @@ fn encode_pfm(image: &Image, out: &mut impl Write) -> Result<(), String> {
 /// Linear value to an 8-bit sRGB code after `exposure` stops, clamped to [0, 1].
 pub fn tone_map(linear: f32, exposure: f32) -> u8 {
     let v = (linear * exposure.exp2()).clamp(0.0, 1.0);
-    let srgb = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    let srgb = if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
     (srgb * 255.0 + 0.5) as u8
 }
 
 fn encode_png(image: &Image, exposure: f32, out: &mut BufWriter<File>) -> Result<(), String> {
     use image::ImageEncoder;
-    let bytes: Vec<u8> =
-        image.pixels.iter().flat_map(|p| p.to_array().map(|c| tone_map(c, exposure))).collect();
+    let bytes: Vec<u8> = image
+        .pixels
+        .iter()
+        .flat_map(|p| p.to_array().map(|c| tone_map(c, exposure)))
+        .collect();
     image::codecs::png::PngEncoder::new(out)
-        .write_image(&bytes, image.width as u32, image.height as u32, image::ExtendedColorType::Rgb8)
+        .write_image(
+            &bytes,
+            image.width as u32,
+            image.height as u32,
+            image::ExtendedColorType::Rgb8,
+        )
         .map_err(|e| e.to_string())
 }
 
-fn encode_exr(image: &Image, precision: ExrPrecision, out: &mut BufWriter<File>) -> Result<(), String> {
+fn encode_exr(
+    image: &Image,
+    precision: ExrPrecision,
+    out: &mut BufWriter<File>,
+) -> Result<(), String> {
     use exr::prelude::{Image as ExrImage, SpecificChannels, WritableImage};
     let size = (image.width, image.height);
     let at = |pos: exr::math::Vec2<usize>| image.pixels[pos.1 * image.width + pos.0];
@@ -264,14 +327,22 @@ fn encode_exr(image: &Image, precision: ExrPrecision, out: &mut BufWriter<File>)
                 let p = at(pos);
                 (p.x, p.y, p.z)
             });
-            ExrImage::from_channels(size, channels).write().to_buffered(out)
+            ExrImage::from_channels(size, channels)
+                .write()
+                .to_buffered(out)
         }
         ExrPrecision::F16 => {
             let channels = SpecificChannels::rgb(|pos| {
                 let p = at(pos);
-                (half::f16::from_f32(p.x), half::f16::from_f32(p.y), half::f16::from_f32(p.z))
+                (
+                    half::f16::from_f32(p.x),
+                    half::f16::from_f32(p.y),
+                    half::f16::from_f32(p.z),
+                )
             });
-            ExrImage::from_channels(size, channels).write().to_buffered(out)
+            ExrImage::from_channels(size, channels)
+                .write()
+                .to_buffered(out)
         }
     };
     result.map_err(|e| e.to_string())
@@ -283,8 +354,14 @@ pub fn read_pfm(path: &Path) -> Result<Image, ImageError> {
     let mut bytes = Vec::new();
     File::open(path)
         .and_then(|mut f| f.read_to_end(&mut bytes))
-        .map_err(|source| ImageError::Io { path: path.to_path_buf(), source })?;
-    decode_pfm(&bytes).map_err(|message| ImageError::BadPfm { path: path.to_path_buf(), message })
+        .map_err(|source| ImageError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    decode_pfm(&bytes).map_err(|message| ImageError::BadPfm {
+        path: path.to_path_buf(),
+        message,
+    })
 }
 
 fn decode_pfm(bytes: &[u8]) -> Result<Image, String> {
@@ -324,18 +401,29 @@ fn decode_pfm(bytes: &[u8]) -> Result<Image, String> {
         .and_then(|n| n.checked_mul(channels * 4))
         .ok_or("image too large")?;
     if raster.len() < expected {
-        return Err(format!("raster has {} bytes, expected {expected}", raster.len()));
+        return Err(format!(
+            "raster has {} bytes, expected {expected}",
+            raster.len()
+        ));
     }
     let floats: Vec<f32> = raster[..expected]
         .chunks_exact(4)
         .map(|b| {
             let b = [b[0], b[1], b[2], b[3]];
-            if little_endian { f32::from_le_bytes(b) } else { f32::from_be_bytes(b) }
+            if little_endian {
+                f32::from_le_bytes(b)
+            } else {
+                f32::from_be_bytes(b)
+            }
         })
         .collect();
     // The file's first row is the bottom of the image.
     Ok(Image::from_fn(width, height, |x, y| {
         let i = ((height - 1 - y) * width + x) * channels;
-        if channels == 3 { Vec3::new(floats[i], floats[i + 1], floats[i + 2]) } else { Vec3::splat(floats[i]) }
+        if channels == 3 {
+            Vec3::new(floats[i], floats[i + 1], floats[i + 2])
+        } else {
+            Vec3::splat(floats[i])
+        }
     }))
 }

@@ -18,8 +18,10 @@ fn test_image(width: usize, height: usize) -> Image {
 }
 
 fn files_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> =
-        fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    let mut names: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
     names.sort();
     names
 }
@@ -33,7 +35,10 @@ fn pfm_round_trip_is_bit_exact() {
     let back = read_pfm(&path).unwrap();
     assert_eq!((back.width, back.height), (7, 5));
     for (a, b) in image.pixels.iter().zip(&back.pixels) {
-        assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits));
+        assert_eq!(
+            a.to_array().map(f32::to_bits),
+            b.to_array().map(f32::to_bits)
+        );
     }
 }
 
@@ -93,18 +98,26 @@ fn read_exr(path: &Path) -> Image {
 #[test]
 fn exr_round_trip_f32_is_exact_and_f16_is_close() {
     let dir = tempfile::tempdir().unwrap();
-    let image = Image::from_fn(9, 4, |x, y| Vec3::new(x as f32 * 0.37, y as f32 * 11.0, 1e-3));
+    let image = Image::from_fn(9, 4, |x, y| {
+        Vec3::new(x as f32 * 0.37, y as f32 * 11.0, 1e-3)
+    });
     let path = dir.path().join("a.exr");
     write_image(&path, &image, &WriteOptions::default()).unwrap();
     assert_eq!(read_exr(&path), image);
 
     let path = dir.path().join("h.EXR");
-    let options = WriteOptions { exr_precision: ExrPrecision::F16, ..Default::default() };
+    let options = WriteOptions {
+        exr_precision: ExrPrecision::F16,
+        ..Default::default()
+    };
     write_image(&path, &image, &options).unwrap();
     let back = read_exr(&path);
     assert_eq!((back.width, back.height), (9, 4));
     for (a, b) in image.pixels.iter().zip(&back.pixels) {
-        assert!((*a - *b).abs().max_element() <= a.abs().max_element() * 1e-3 + 1e-6, "{a} {b}");
+        assert!(
+            (*a - *b).abs().max_element() <= a.abs().max_element() * 1e-3 + 1e-6,
+            "{a} {b}"
+        );
     }
     assert_ne!(back, image, "half precision should round something");
 }
@@ -136,8 +149,12 @@ fn png_has_the_right_size_and_the_tone_map_is_monotonic() {
 fn unknown_extension_is_named() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["a.jpg", "noext"] {
-        let err = write_image(&dir.path().join(name), &test_image(2, 2), &WriteOptions::default())
-            .unwrap_err();
+        let err = write_image(
+            &dir.path().join(name),
+            &test_image(2, 2),
+            &WriteOptions::default(),
+        )
+        .unwrap_err();
         assert!(matches!(err, ImageError::UnknownExtension { .. }), "{err}");
         if name == "a.jpg" {
             assert!(err.to_string().contains("\"jpg\""), "{err}");
@@ -150,8 +167,12 @@ fn unknown_extension_is_named() {
 fn missing_directory_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let missing = dir.path().join("nope");
-    let err =
-        write_image(&missing.join("a.pfm"), &test_image(2, 2), &WriteOptions::default()).unwrap_err();
+    let err = write_image(
+        &missing.join("a.pfm"),
+        &test_image(2, 2),
+        &WriteOptions::default(),
+    )
+    .unwrap_err();
     match &err {
         ImageError::MissingDirectory { dir, .. } => assert_eq!(dir, &missing),
         other => panic!("{other}"),
@@ -168,14 +189,19 @@ fn a_failing_encoder_leaves_the_earlier_file_intact() {
     let before = fs::read(&path).unwrap();
 
     let err = write_atomically(&path, |out| {
-        out.write_all(b"PF\n9 9\n-1.0\nhalf a raster").map_err(|e| e.to_string())?;
+        out.write_all(b"PF\n9 9\n-1.0\nhalf a raster")
+            .map_err(|e| e.to_string())?;
         out.flush().map_err(|e| e.to_string())?;
         Err("disk on fire".into())
     })
     .unwrap_err();
     assert!(err.to_string().contains("disk on fire"));
     assert_eq!(fs::read(&path).unwrap(), before);
-    assert_eq!(files_in(dir.path()), vec!["out.pfm".to_string()], "temporary file left behind");
+    assert_eq!(
+        files_in(dir.path()),
+        vec!["out.pfm".to_string()],
+        "temporary file left behind"
+    );
 }
 
 #[test]
@@ -195,7 +221,10 @@ fn non_finite_pixels_are_rejected_by_name_or_zeroed() {
     }
     assert_eq!(fs::read(&path).unwrap(), before);
 
-    let options = WriteOptions { non_finite: NonFinitePolicy::Zero, ..Default::default() };
+    let options = WriteOptions {
+        non_finite: NonFinitePolicy::Zero,
+        ..Default::default()
+    };
     write_image(&path, &bad, &options).unwrap();
     let back = read_pfm(&path).unwrap();
     assert_eq!(back.get(2, 1), Vec3::ZERO);
@@ -217,7 +246,11 @@ fn a_rename_onto_a_directory_fails_and_cleans_up() {
 #[test]
 fn inconsistent_dimensions_are_an_error() {
     let dir = tempfile::tempdir().unwrap();
-    let image = Image { width: 3, height: 3, pixels: vec![Vec3::ZERO; 8] };
+    let image = Image {
+        width: 3,
+        height: 3,
+        pixels: vec![Vec3::ZERO; 8],
+    };
     let err = write_image(&dir.path().join("a.png"), &image, &WriteOptions::default()).unwrap_err();
     assert!(matches!(err, ImageError::BadDimensions { .. }));
 }
