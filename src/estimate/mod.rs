@@ -2,8 +2,34 @@
 //! An estimate turns the photons near a surface point into photon power per unit area
 //! (irradiance, W/m² per channel); the caller applies the BRDF. Owns kernels and their
 //! normalisation; must not trace rays or know about Embree, cameras or images.
+//!
+//! - [`kernel`]: the radial kernels, each normalised over the unit disc.
+//! - [`classic`]: k-nearest-neighbour estimates (simple, cone, Gaussian) and the fixed-radius
+//!   Epanechnikov estimate.
+//! - [`diffusion`]: the diffusion based estimate (gradient pass, structure and diffusion tensors).
+//! - [`settings`]: the command-line settings shared by `dpm render` and `dpm density`, their
+//!   validation and the construction of an estimate from them.
+//!
+//! Normal agreement, shared by every estimate: a photon is gathered only when its stored
+//! surface normal `n_i` satisfies `n_i · n ≥` [`NORMAL_AGREEMENT_MIN_COS`] (cos 60°) with the
+//! query normal `n`. That rejects the far side of a thin wall (`n_i · n ≈ −1`) and a
+//! perpendicular wall at a corner (`≈ 0`), and accepts a curved surface whose normal turns by
+//! less than 60° within one radius. The stored normal is quantised to about 1°, far inside
+//! that margin. How rejection interacts with k is documented in [`classic`].
 
-use crate::photon::{Neighbours, PhotonMap};
+pub mod classic;
+pub mod diffusion;
+pub mod kernel;
+pub mod settings;
+
+pub use classic::{FixedRadiusEstimate, KnnEstimate};
+pub use diffusion::{
+    DiffusionEstimate, DiffusionKernel, DiffusionParams, DiffusivityUnits, KernelShape,
+};
+pub use kernel::RadialKernel;
+pub use settings::{EstimateError, EstimatorKind, EstimatorSettings, ResolvedEstimator};
+
+use crate::photon::{Neighbours, Photon, PhotonMap};
 use glam::Vec3;
 
 /// Where an estimate is asked for: a surface point and its unit normal (on the side light
@@ -27,8 +53,39 @@ pub trait RadianceEstimate: Send + Sync {
 
     /// Work on the whole map before any query (the diffusion estimate's gradient pass).
     /// The default does nothing, so no pass runs for an estimate that does not need it.
+    /// Callers time this call as its own phase.
     fn prepare(&self, _map: &mut PhotonMap) {}
 
     /// Photon power per unit area arriving at `query`.
     fn irradiance(&self, map: &PhotonMap, query: &Query, scratch: &mut Scratch) -> Vec3;
+}
+
+/// Smallest cosine between a photon's stored normal and the query normal for the photon to
+/// be gathered (60°).
+pub const NORMAL_AGREEMENT_MIN_COS: f32 = 0.5;
+
+/// Whether `photon` lies on the surface seen from `normal` (see the module notes).
+#[inline]
+pub fn normals_agree(photon: &Photon, normal: Vec3) -> bool {
+    photon.normal().dot(normal) >= NORMAL_AGREEMENT_MIN_COS
+}
+
+/// Photon power as f64, for sums that must not overflow or lose the small terms.
+#[inline]
+pub(crate) fn power_f64(photon: &Photon) -> glam::DVec3 {
+    photon.power().as_dvec3()
+}
+
+/// Converts an f64 irradiance to f32, saturating instead of overflowing to infinity so that
+/// an absurd radius or power never puts inf or NaN into an image.
+#[inline]
+pub(crate) fn to_irradiance(e: glam::DVec3) -> Vec3 {
+    let clamp = |v: f64| {
+        if v.is_nan() {
+            0.0
+        } else {
+            v.clamp(-(f32::MAX as f64), f32::MAX as f64) as f32
+        }
+    };
+    Vec3::new(clamp(e.x), clamp(e.y), clamp(e.z))
 }
