@@ -531,3 +531,127 @@ fn the_built_in_truth_is_consistent() {
         .fold(0.0, f64::max);
     assert!((line_row - d.thin_line_peak()).abs() < 1e-9 * line_row);
 }
+
+// ---- through the command, with the real estimates ----
+
+/// Writes `n` uniformly random photons of power 2 on the unit square as CSV.
+fn uniform_photon_file(dir: &Path, n: usize) -> std::path::PathBuf {
+    let mut rng = SplitMix64::new(8);
+    let text: String = (0..n)
+        .map(|_| format!("{},{},2\n", rng.next_f64(), rng.next_f64()))
+        .collect();
+    let path = dir.join("uniform.csv");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn every_estimate_of_a_uniform_density_is_its_density() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 20_000;
+    let photons = uniform_photon_file(dir.path(), n);
+    let out = dir.path().join("u.pfm");
+    for estimator in ["simple", "cone", "gaussian", "epanechnikov", "diffusion"] {
+        let a = args(&[
+            "--photons",
+            photons.to_str().unwrap(),
+            "--extent",
+            "0.2,0.2,0.8,0.8",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--estimator",
+            estimator,
+            "--k",
+            "200",
+            "--radius",
+            "0.06",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        run(&a).unwrap();
+        let image = read_pfm(&out).unwrap();
+        let truth = 2.0 * n as f64;
+        let mean = image.pixels.iter().map(|p| p.x as f64).sum::<f64>() / 64.0;
+        // About 200 photons an estimate (7% noise), 64 pixels sharing some of them.
+        assert!(
+            (mean / truth - 1.0).abs() < 0.04,
+            "{estimator}: {mean} vs {truth}"
+        );
+        for p in &image.pixels {
+            assert!((p.x as f64 / truth - 1.0).abs() < 0.4, "{estimator}: {p}");
+        }
+    }
+}
+
+#[test]
+fn the_kernel_field_needs_the_diffusion_estimate_and_shows_edges() {
+    // Photons jittered on lattices over [0.2, 0.8]² (one a cell, so little noise), four times
+    // denser left of x = 0.5 than right of it: one vertical edge. Exact lattices would fool the
+    // gradient pass (photons at exactly its radius fall in or out by rounding, one side at a
+    // time), and Poisson noise with this few photons would squeeze the kernel everywhere.
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = SplitMix64::new(1);
+    let mut text = String::new();
+    for (x0, spacing) in [(0.2, 0.0025), (0.5, 0.005)] {
+        let n = (0.3 / spacing).round() as usize;
+        for i in 0..n {
+            for j in 0..2 * n {
+                let (x, y) = (i as f64 + rng.next_f64(), j as f64 + rng.next_f64());
+                text += &format!("{},{}\n", x0 + x * spacing, 0.2 + y * spacing);
+            }
+        }
+    }
+    let photons = dir.path().join("step.csv");
+    std::fs::write(&photons, text).unwrap();
+    let out = dir.path().join("e.pfm");
+    let field = dir.path().join("k.pfm");
+    let with = |estimator: &'static str| {
+        args(&[
+            "--photons",
+            photons.to_str().unwrap(),
+            "--extent",
+            "0.3,0.3,0.7,0.7",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--radius",
+            "0.05",
+            "--estimator",
+            estimator,
+            "--kernel-field",
+            field.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+    let err = run(&with("epanechnikov")).unwrap_err();
+    assert!(
+        matches!(err, DensityError::KernelFieldNeedsDiffusion(_)),
+        "{err}"
+    );
+    assert!(!field.exists());
+
+    run(&with("diffusion")).unwrap();
+    let image = read_pfm(&field).unwrap();
+    let grid = Grid {
+        width: 16,
+        height: 16,
+        extent: "0.3,0.3,0.7,0.7".parse().unwrap(),
+    };
+    for i in 0..grid.len() {
+        let distance = (grid.centre_of(i).x - 0.5).abs();
+        let p = image.pixels[i];
+        if distance < 0.03 {
+            // Squeezed across a vertical edge: bright cyan (the long axis is vertical).
+            assert!(
+                p.max_element() > 0.5 && p.x < 0.05 * p.y && (p.y - p.z).abs() < 0.05 * p.y,
+                "{i}: {p}"
+            );
+        } else if distance > 0.1 {
+            assert!(p.max_element() < 0.1, "{i}: {p}");
+        }
+    }
+}

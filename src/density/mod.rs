@@ -12,17 +12,16 @@
 pub mod csv;
 pub mod distribution;
 pub mod grid;
+pub mod kernel_field;
 pub mod metrics;
-mod provisional;
 pub mod rng;
 pub mod shapes;
 
 pub use distribution::{Distribution, DistributionName, Truth};
 pub use grid::{Extent, Grid};
 pub use metrics::{Metrics, RegionWidths, Regions};
-pub use provisional::EstimatorSettings;
 
-use crate::estimate::RadianceEstimate;
+use crate::estimate::{EstimateError, EstimatorSettings, ResolvedEstimator};
 use crate::image_io::{Image, ImageError, WriteOptions, write_atomically, write_image};
 use crate::photon::{Photon, PhotonMap};
 use glam::{DVec2, Vec3};
@@ -69,6 +68,11 @@ pub struct DensityArgs {
     // conflicts with a given argument (clap issue 4520).
     #[arg(long, value_name = "OUT", conflicts_with = "photons")]
     pub truth: Option<PathBuf>,
+    /// Write an image of the diffusion estimate's kernel at each pixel (like the paper's
+    /// Figure 2b): hue = the edge direction's angle (0° to 180° round the colour wheel),
+    /// brightness = 1 − λ2 (black: round kernel; bright: squeezed across an edge).
+    #[arg(long, value_name = "OUT")]
+    pub kernel_field: Option<PathBuf>,
     /// Write the report, metrics included, as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
@@ -95,8 +99,10 @@ pub enum DensityError {
     },
     #[error("{}: no photons", .0.display())]
     NoPhotons(PathBuf),
-    #[error("--estimator: {0}")]
-    Estimator(String),
+    #[error(transparent)]
+    Estimator(#[from] EstimateError),
+    #[error("--kernel-field needs --estimator diffusion (the estimator is {0})")]
+    KernelFieldNeedsDiffusion(String),
     #[error(transparent)]
     Image(#[from] ImageError),
 }
@@ -244,10 +250,13 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     let photons_seconds = start.elapsed().as_secs_f64();
 
     let start = Instant::now();
-    let estimate = args
-        .estimator
-        .build(&map)
-        .map_err(|e| DensityError::Estimator(e.to_string()))?;
+    let resolved = args.estimator.resolve(&map)?;
+    if args.kernel_field.is_some() && !matches!(resolved, ResolvedEstimator::Diffusion(_)) {
+        return Err(DensityError::KernelFieldNeedsDiffusion(
+            resolved.to_string(),
+        ));
+    }
+    let estimate = resolved.into_boxed();
     estimate.prepare(&mut map);
     let prepare_seconds = start.elapsed().as_secs_f64();
 
@@ -289,6 +298,11 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
         let image = Image::from_grey(grid.width, grid.height, &grey);
         write_image(path, &image, &options)?;
     }
+    if let (Some(path), ResolvedEstimator::Diffusion(diffusion)) = (&args.kernel_field, resolved) {
+        let bar = grid::progress_bar(grid.height, "kernel field");
+        let image = kernel_field::render(&grid, &map, &diffusion, &bar);
+        write_image(path, &image, &WriteOptions::default())?;
+    }
     if let Some(path) = &args.csv {
         let text = csv::format_grid(grid.width, &values, truth_centre, |row, col| {
             let c = grid.centre(row, col);
@@ -300,7 +314,7 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     let report = DensityReport {
         source: source.name,
         photons: photon_count,
-        estimator: describe_estimator(estimate.as_ref(), &args.estimator),
+        estimator: resolved.to_string(),
         width: grid.width,
         height: grid.height,
         extent: grid.extent,
@@ -317,10 +331,6 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
         write_text(path, &(json + "\n"))?;
     }
     Ok(report)
-}
-
-fn describe_estimator(estimate: &dyn RadianceEstimate, settings: &EstimatorSettings) -> String {
-    format!("{} ({settings:?})", estimate.name())
 }
 
 /// The mean of the RGB channels: the scalar the metrics and the CSV use.
