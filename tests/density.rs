@@ -594,7 +594,7 @@ fn the_kernel_field_needs_the_diffusion_estimate_and_shows_edges() {
     let dir = tempfile::tempdir().unwrap();
     let mut rng = SplitMix64::new(1);
     let mut text = String::new();
-    for (x0, spacing) in [(0.2, 0.0025), (0.5, 0.005)] {
+    for (x0, spacing) in [(0.2, 0.0025f64), (0.5, 0.005)] {
         let n = (0.3 / spacing).round() as usize;
         for i in 0..n {
             for j in 0..2 * n {

@@ -18,7 +18,7 @@
 //!   over each bin's cross-section, averaged over the bins, over the true peak.
 //!
 //! Energy: Σ estimate · pixel area against Σ truth · pixel area over the interior, with the truth
-//! averaged over each pixel (a thin line 4.9 pixels wide covers 4 or 5 pixel centres, so summing
+//! averaged over each pixel (a thin line 4.2 pixels wide covers 4 or 5 pixel centres, so summing
 //! centre values would miscount its energy by up to 20%). The interior's border crosses only
 //! the uniform background, where what a kernel carries out it also carries in, so a kernel that
 //! preserves energy scores 0 up to noise.
