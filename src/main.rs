@@ -2,6 +2,7 @@
 //! maps errors to exit codes (2 for bad input, 1 for failures inside). No rendering logic here.
 
 use clap::{Parser, Subcommand};
+use dpm::density::DensityArgs;
 use dpm::render::pipeline::{self, RenderArgs};
 use std::process::ExitCode;
 
@@ -21,6 +22,10 @@ enum Command {
     /// Render a scene: photon tracing (caustic and global maps), the chosen caustic estimate,
     /// and a Whitted-style eye pass; ends with a per-phase timing table.
     Render(RenderArgs),
+    /// Estimate a 2-D photon distribution (photons in the plane z = 0) on a grid: from a CSV
+    /// file, or from a built-in distribution whose exact density is known, in which case the
+    /// error against it is reported (the paper's Figures 4-6).
+    Density(DensityArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +43,17 @@ fn main() -> ExitCode {
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(e.exit_code() as u8)
+            }
+        },
+        Command::Density(args) => match dpm::density::run(&args) {
+            Ok(report) => {
+                print!("{report}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                // Every density error is about its input: the photons, flags or output path.
+                ExitCode::from(2)
             }
         },
     }

@@ -102,20 +102,41 @@ pub fn render_kernel_field(
     use crate::world::Surface;
     let (w, h) = (camera.width as usize, camera.height as usize);
     let mut pixels = vec![Vec3::ZERO; w * h];
-    pixels.par_chunks_mut(w).enumerate().for_each_init(Scratch::default, |scratch, (y, row)| {
-        for (x, px) in row.iter_mut().enumerate() {
-            let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
-            let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY) else { continue };
-            let Surface::Material(m) = hit.surface else { continue };
-            if !matches!(world.material(m), crate::scene::Material::Diffuse { .. }) {
-                continue;
+    pixels
+        .par_chunks_mut(w)
+        .enumerate()
+        .for_each_init(Scratch::default, |scratch, (y, row)| {
+            for (x, px) in row.iter_mut().enumerate() {
+                let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+                let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY) else {
+                    continue;
+                };
+                let Surface::Material(m) = hit.surface else {
+                    continue;
+                };
+                if !matches!(world.material(m), crate::scene::Material::Diffuse { .. }) {
+                    continue;
+                }
+                let n = if d.dot(hit.geometric_normal) < 0.0 {
+                    hit.shading_normal
+                } else {
+                    -hit.shading_normal
+                };
+                let query = crate::estimate::Query {
+                    position: hit.position,
+                    normal: n,
+                };
+                let shape = estimate.kernel_at(map, &query, scratch);
+                let (t, b) = crate::sampling::basis(n);
+                *px = crate::density::kernel_field::colour(
+                    shape.x1.dot(b).atan2(shape.x1.dot(t)),
+                    shape.lambda2,
+                );
             }
-            let n = if d.dot(hit.geometric_normal) < 0.0 { hit.shading_normal } else { -hit.shading_normal };
-            let query = crate::estimate::Query { position: hit.position, normal: n };
-            let shape = estimate.kernel_at(map, &query, scratch);
-            let (t, b) = crate::sampling::basis(n);
-            *px = crate::density::kernel_field::colour(shape.x1.dot(b).atan2(shape.x1.dot(t)), shape.lambda2);
-        }
-    });
-    Image { width: w, height: h, pixels }
+        });
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
 }

@@ -154,7 +154,9 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
     }
     if let Some(path) = &args.kernel_field {
         if args.estimate.estimator != EstimatorKind::Diffusion {
-            return Err(RenderError::Invalid("--kernel-field needs --estimator diffusion".into()));
+            return Err(RenderError::Invalid(
+                "--kernel-field needs --estimator diffusion".into(),
+            ));
         }
         ImageFormat::from_path(path)?;
     }
@@ -297,6 +299,14 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     times.time("write image", || {
         image_io::write_image(&output, &image, &options)
     })?;
+    if let (Some(path), Some(d), Some((map, _))) = (&args.kernel_field, &diffusion, &caustic_map) {
+        let field = times.time("kernel field", || {
+            super::render_kernel_field(&camera, &world, map, d)
+        });
+        times.time("write kernel field", || {
+            image_io::write_image(path, &field, &WriteOptions::default())
+        })?;
+    }
     if let Some(path) = &args.stats {
         let json = serde_json::json!({
             "scene": args.scene,
