@@ -9,6 +9,7 @@ pub mod density;
 pub mod embree;
 pub mod estimate;
 pub mod image_io;
+pub mod interrupt;
 pub mod optics;
 pub mod photon;
 pub mod render;

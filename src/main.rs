@@ -1,5 +1,6 @@
 //! The `dpm` command line: parses arguments, runs one subcommand, prints its timing table and
-//! maps errors to exit codes (2 for bad input, 1 for failures inside). No rendering logic here.
+//! maps errors to exit codes (2 for bad input, 1 for failures inside, 130 when interrupted by
+//! Ctrl-C). No rendering logic here.
 
 use clap::{Parser, Subcommand};
 use dpm::density::DensityArgs;
@@ -30,6 +31,12 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if matches!(cli.command, Command::Render(_)) {
+        // Ctrl-C then stops the render cleanly, keeping any earlier output (dpm::interrupt).
+        if let Err(e) = dpm::interrupt::install() {
+            eprintln!("warning: {e}");
+        }
+    }
     match cli.command {
         Command::Render(args) => match pipeline::run(&args) {
             Ok(outcome) => {

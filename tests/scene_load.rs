@@ -499,6 +499,14 @@ const MALFORMED: &[(&str, Option<&str>, usize, &str, &str)] = &[
     ("missing_mtl",         Some("meshes/missing-mtl.obj"),       2,  "objects[1].file",              "cannot be read"),
     ("kd_above_one",        Some("meshes/bright.mtl"),            7,  "objects[1].file",              "not in [0, 1]"),
     ("glass_without_ni",    Some("meshes/glass-no-ni.mtl"),       3,  "objects[1].file",              "needs Ni"),
+    ("not_utf8",            None,                                 2,  "scene",                        "not UTF-8"),
+    ("empty_file",          None,                                 1,  "camera",                       "missing field"),
+    ("negative_radius",     None,                                 21, "objects[0].radius",            "greater than 0"),
+    ("power_overflows",     None,                                 12, "lights[0].power[0]",           "must be finite"),
+    ("nan_camera",          None,                                 3,  "camera.position[0]",           "not a finite number"),
+    ("zero_light_radius",   None,                                 12, "lights[0].radius",             "greater than 0"),
+    ("mesh_not_obj",        None,                                 26, "objects[1].file",              "has no faces"),
+    ("string_resolution",   None,                                 7,  "camera.resolution[0]",         "invalid type"),
 ];
 
 #[test]

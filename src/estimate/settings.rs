@@ -55,7 +55,7 @@ pub struct EstimatorSettings {
     /// so k ≥ 2). For the fixed-radius estimates it sets the default --radius. 400 is the
     /// paper's cone-filter setting, the baseline the diffusion estimate is compared with;
     /// the diffusion estimate's flat regions are quieter with ~1000 (see --diffusivity).
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value_t = 400, allow_negative_numbers = true)]
     pub k: usize,
 
     /// Support radius of the fixed-radius estimates (epanechnikov, diffusion), in scene units.

@@ -5,6 +5,7 @@
 pub mod kdtree;
 pub mod map;
 pub mod record;
+pub mod store;
 pub mod tracer;
 
 pub use kdtree::{KdTree, Neighbours};

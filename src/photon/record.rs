@@ -42,6 +42,29 @@ impl Photon {
     pub fn normal(&self) -> Vec3 {
         decode_octahedral(self.normal)
     }
+
+    /// The 20 stored bytes, field by field, little-endian (for photon map files).
+    pub fn to_le_bytes(&self) -> [u8; 20] {
+        let mut b = [0u8; 20];
+        for (i, p) in self.position.iter().enumerate() {
+            b[4 * i..4 * i + 4].copy_from_slice(&p.to_le_bytes());
+        }
+        b[12..16].copy_from_slice(&self.power);
+        b[16..18].copy_from_slice(&self.direction);
+        b[18..20].copy_from_slice(&self.normal);
+        b
+    }
+
+    /// The inverse of [`Photon::to_le_bytes`]: the same photon, bit for bit.
+    pub fn from_le_bytes(b: [u8; 20]) -> Self {
+        let word = |i: usize| u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
+        Self {
+            position: [word(0), word(4), word(8)],
+            power: [b[12], b[13], b[14], b[15]],
+            direction: [b[16], b[17]],
+            normal: [b[18], b[19]],
+        }
+    }
 }
 
 /// Shared-exponent RGB (Ward's RGBE), rounded to nearest: the error of every channel is at most

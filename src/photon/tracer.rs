@@ -86,6 +86,8 @@ impl LightChooser {
 }
 
 /// Traces paths until `target` photons are stored (or `max_paths` are emitted), and builds the map.
+/// Stops early with an empty map when an interruption is requested ([`crate::interrupt`]);
+/// the caller must check for it and discard the map.
 pub fn trace_map(
     world: &World,
     kind: MapKind,
@@ -108,12 +110,15 @@ pub fn trace_map(
     let mut traced: Vec<TracedPhoton> = Vec::with_capacity(target);
     let mut emitted: u64 = 0;
     let mut batch = 16_384u64;
-    while traced.len() < target && emitted < max_paths {
+    while traced.len() < target && emitted < max_paths && !crate::interrupt::requested() {
         let start = emitted;
         let end = (start + batch).min(max_paths);
         let paths: Vec<Vec<TracedPhoton>> = (start..end)
             .into_par_iter()
             .map(|i| {
+                if crate::interrupt::requested() {
+                    return Vec::new();
+                }
                 let mut rng = Rng::for_index(seed, stream, i);
                 trace_path(world, kind, &chooser, aim, &mut rng)
             })
@@ -131,6 +136,10 @@ pub fn trace_map(
         let rate = traced.len().max(1) as f64 / emitted.max(1) as f64;
         let remaining = (target - traced.len().min(target)) as f64 / rate;
         batch = (remaining * 1.05).clamp(16_384.0, 4_000_000.0) as u64;
+    }
+    if crate::interrupt::requested() {
+        // Not worth building: the caller discards it.
+        return (PhotonMap::default(), TraceCounts { emitted, stored: 0 });
     }
     let scale = 1.0 / emitted.max(1) as f32;
     let photons: Vec<Photon> = traced

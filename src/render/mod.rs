@@ -57,6 +57,8 @@ impl PinholeCamera {
 
 /// Renders every pixel: `spp` samples each (one sample goes through the pixel centre; more are
 /// jittered), drawn from the pixel's own generator so the image is the same on any thread count.
+/// Pixels not yet started when an interruption is requested ([`crate::interrupt`]) are left
+/// black; the caller must check for it and discard the image.
 pub fn render_image(
     camera: &PinholeCamera,
     integrator: &Integrator,
@@ -71,6 +73,10 @@ pub fn render_image(
         .enumerate()
         .for_each_init(Scratch::default, |scratch, (y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
+                // Per pixel, not per row: a row through glass can take seconds.
+                if crate::interrupt::requested() {
+                    return;
+                }
                 let mut rng = Rng::for_index(seed, Stream::Pixels, (y * w + x) as u64);
                 let mut sum = Vec3::ZERO;
                 for s in 0..spp {

@@ -15,6 +15,7 @@ use crate::estimate::settings::{
 };
 use crate::image_io::{self, Image, ImageError, ImageFormat, WriteOptions};
 use crate::photon::PhotonMap;
+use crate::photon::store::{self, MapInfo, StoreError};
 use crate::photon::tracer::{MapKind, TraceCounts, trace_map};
 use crate::scene::{self, Material, SceneError};
 use crate::timing::{PhaseTimes, progress};
@@ -34,15 +35,15 @@ pub struct RenderArgs {
     pub output: Option<PathBuf>,
 
     /// Worker threads (0: one per core). The image does not depend on it.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
 
     /// Seed of every random number (photon paths and pixel samples).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
 
     /// Samples per pixel: the first goes through the pixel centre, the rest are jittered.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub spp: u32,
 
     /// Exposure in stops for PNG output (linear formats are written unscaled).
@@ -50,28 +51,28 @@ pub struct RenderArgs {
     pub exposure: f32,
 
     /// Mirror and glass bounces followed from the eye.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
     pub max_depth: u32,
 
     /// Photons STORED in the caustic map (light → specular+ → diffuse); paths are emitted until
     /// this many are stored. Only built when the scene has a mirror or glass object; 0 turns
     /// caustics off.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, allow_negative_numbers = true)]
     pub caustic_photons: usize,
 
     /// Photons STORED in the global map (indirect diffuse light). Default: 200000 when the scene
     /// has two or more diffuse objects (so diffuse light can bounce between them), else 0 (no
     /// global map: a lone plane cannot light itself).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub global_photons: Option<usize>,
 
     /// Final-gather rays per diffuse eye hit for indirect light; 0 shows the global map's
     /// estimate directly instead (faster, blotchier).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub final_gather: u32,
 
     /// Photons per global-map estimate (constant kernel, k-th photon left out).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
     pub global_k: usize,
 
     /// Caustic radiance estimate.
@@ -86,6 +87,17 @@ pub struct RenderArgs {
     /// Write the per-phase times and counts as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+
+    /// Save the photon maps to FILE (versioned binary with a checksum, written atomically)
+    /// right after tracing, so a later render can skip tracing with --load-photons.
+    #[arg(long, value_name = "FILE")]
+    pub save_photons: Option<PathBuf>,
+
+    /// Load the photon maps from FILE (made by --save-photons) instead of tracing them. The
+    /// file must come from the same scene (lights, materials, geometry), --seed and photon
+    /// counts; the image is then identical to one from freshly traced maps.
+    #[arg(long, value_name = "FILE")]
+    pub load_photons: Option<PathBuf>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -105,6 +117,20 @@ pub enum RenderError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error("{0}")]
+    Photons(#[from] StoreError),
+    #[error(
+        "interrupted; {} was not written{}",
+        output.display(),
+        saved_photons.as_ref().map(|p| format!(
+            " (the photon maps were saved to {}; reuse them with --load-photons)",
+            p.display()
+        )).unwrap_or_default()
+    )]
+    Interrupted {
+        output: PathBuf,
+        saved_photons: Option<PathBuf>,
+    },
 }
 
 impl RenderError {
@@ -113,6 +139,8 @@ impl RenderError {
         match self {
             RenderError::Embree(_) | RenderError::Io { .. } => 1,
             RenderError::Image(ImageError::Io { .. } | ImageError::Encode { .. }) => 1,
+            RenderError::Photons(e) => e.exit_code(),
+            RenderError::Interrupted { .. } => 130,
             _ => 2,
         }
     }
@@ -166,6 +194,7 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
             args.global_k
         )));
     }
+    validate_photon_files(args, &output)?;
     Ok(output)
 }
 
@@ -179,7 +208,9 @@ pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
 fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, RenderError> {
     embree::enable_flush_to_zero();
     let mut times = PhaseTimes::new();
-    let description = times.time("load scene", || scene::load(&args.scene))?;
+    let (description, report) =
+        times.time("load scene", || scene::load_with_report(&args.scene))?;
+    report_load(args, &report, &mut times);
     let world = times.time("build Embree scene", || World::new(description))?;
 
     let diffuse_objects = world
@@ -198,31 +229,17 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         args.global_photons
             .unwrap_or(if diffuse_objects >= 2 { 200_000 } else { 0 });
 
-    let caustic = if world.has_specular() && args.caustic_photons > 0 {
-        Some(trace(
-            &world,
-            MapKind::Caustic,
-            args.caustic_photons,
-            args.seed,
-            "caustic photons",
-            &mut times,
-        ))
-    } else {
-        None
+    let (caustic, global, saved_photons) =
+        photon_maps(args, &world, global_target, &output, &mut times)?;
+    let stop_if_interrupted = || -> Result<(), RenderError> {
+        if crate::interrupt::requested() {
+            return Err(RenderError::Interrupted {
+                output: output.clone(),
+                saved_photons: saved_photons.clone(),
+            });
+        }
+        Ok(())
     };
-    let global = (global_target > 0).then(|| {
-        let kind = MapKind::Global {
-            with_direct: args.final_gather > 0,
-        };
-        trace(
-            &world,
-            kind,
-            global_target,
-            args.seed,
-            "global photons",
-            &mut times,
-        )
-    });
 
     // The caustic estimate; the diffusion estimate's gradient pass is its own phase.
     let mut caustic_map = caustic;
@@ -250,6 +267,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         }
         _ => None,
     };
+    stop_if_interrupted()?;
     let global_estimate = KnnEstimate::new(RadialKernel::Constant, args.global_k, None);
 
     let integrator = Integrator {
@@ -291,6 +309,8 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         start.elapsed(),
         &[("pixels", pixels), ("spp", args.spp as u64)],
     );
+
+    stop_if_interrupted()?;
 
     let options = WriteOptions {
         exposure: args.exposure,
@@ -350,4 +370,255 @@ fn trace(
         &[("emitted", counts.emitted), ("stored", counts.stored)],
     );
     (map, counts)
+}
+
+// ---- Photon map files, memory check and interruption (the reliability additions) ----
+
+/// What loading repaired or suspects: warnings on stderr, dropped triangles in the table.
+fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseTimes) {
+    for warning in &report.warnings {
+        eprintln!("warning: {}: {warning}", args.scene.display());
+    }
+    if report.degenerate_triangles_dropped > 0 {
+        let dropped = report.degenerate_triangles_dropped as u64;
+        times.add_counts("load scene", &[("zero-area triangles dropped", dropped)]);
+    }
+}
+
+/// Checks `--save-photons` / `--load-photons` before any work: a file to load exists, a file
+/// to save goes to an existing directory and is not the output image.
+fn validate_photon_files(args: &RenderArgs, output: &Path) -> Result<(), RenderError> {
+    if let Some(path) = &args.load_photons {
+        if !path.is_file() {
+            let why = if path.exists() {
+                "is not a file"
+            } else {
+                "does not exist"
+            };
+            return Err(RenderError::Invalid(format!(
+                "--load-photons {}: {why}",
+                path.display()
+            )));
+        }
+    }
+    if let Some(path) = &args.save_photons {
+        if path == output {
+            return Err(RenderError::Invalid(format!(
+                "--save-photons {}: is also the output image",
+                path.display()
+            )));
+        }
+        if path.is_dir() {
+            return Err(RenderError::Invalid(format!(
+                "--save-photons {}: is a directory",
+                path.display()
+            )));
+        }
+        let dir = path
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        if !dir.is_dir() {
+            return Err(RenderError::Invalid(format!(
+                "--save-photons {}: directory {} does not exist",
+                path.display(),
+                dir.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The maps this render uses: the caustic map when the scene has a mirror or glass object
+/// (and --caustic-photons > 0), the global map when `global_target` > 0.
+fn wanted_maps(args: &RenderArgs, world: &World, global_target: usize) -> Vec<MapInfo> {
+    let mut wanted = Vec::new();
+    if world.has_specular() && args.caustic_photons > 0 {
+        wanted.push(MapInfo {
+            kind: MapKind::Caustic,
+            target: args.caustic_photons as u64,
+        });
+    }
+    if global_target > 0 {
+        wanted.push(MapInfo {
+            kind: MapKind::Global {
+                with_direct: args.final_gather > 0,
+            },
+            target: global_target as u64,
+        });
+    }
+    wanted
+}
+
+type MapAndCounts = Option<(PhotonMap, TraceCounts)>;
+
+/// The caustic and global maps, loaded from --load-photons or traced (after the memory
+/// check), then saved to --save-photons when asked; also where they were saved.
+fn photon_maps(
+    args: &RenderArgs,
+    world: &World,
+    global_target: usize,
+    output: &Path,
+    times: &mut PhaseTimes,
+) -> Result<(MapAndCounts, MapAndCounts, Option<PathBuf>), RenderError> {
+    let wanted = wanted_maps(args, world, global_target);
+    let scene = store::scene_fingerprint(&world.description);
+    let with_counts = |map: PhotonMap| {
+        let counts = TraceCounts {
+            emitted: map.emitted,
+            stored: map.len() as u64,
+        };
+        (map, counts)
+    };
+    check_memory(args, world, &wanted)?;
+    let (caustic, global) = if let Some(path) = &args.load_photons {
+        let start = Instant::now();
+        let mut file = store::read(path)?;
+        file.check_fits(scene, args.seed, &wanted)?;
+        let caustic = file.take(MapKind::Caustic).map(with_counts);
+        let global = file
+            .take(MapKind::Global { with_direct: false })
+            .map(with_counts);
+        let stored = |m: &MapAndCounts| m.as_ref().map_or(0, |(_, c)| c.stored);
+        times.record(
+            "load photons",
+            start.elapsed(),
+            &[("caustic", stored(&caustic)), ("global", stored(&global))],
+        );
+        (caustic, global)
+    } else {
+        let mut caustic = None;
+        let mut global = None;
+        for info in &wanted {
+            let (slot, what) = match info.kind {
+                MapKind::Caustic => (&mut caustic, "caustic photons"),
+                MapKind::Global { .. } => (&mut global, "global photons"),
+            };
+            *slot = Some(trace(
+                world,
+                info.kind,
+                info.target as usize,
+                args.seed,
+                what,
+                times,
+            ));
+            if crate::interrupt::requested() {
+                return Err(RenderError::Interrupted {
+                    output: output.to_path_buf(),
+                    saved_photons: None,
+                });
+            }
+        }
+        (caustic, global)
+    };
+    let mut saved = None;
+    if let Some(path) = &args.save_photons {
+        let start = Instant::now();
+        let maps: Vec<(MapInfo, &PhotonMap)> = wanted
+            .iter()
+            .zip(caustic.iter().chain(global.iter()))
+            .map(|(info, (map, _))| (*info, map))
+            .collect();
+        let bytes = store::write(path, scene, args.seed, &maps)?;
+        times.record("save photons", start.elapsed(), &[("bytes", bytes)]);
+        saved = Some(path.clone());
+    }
+    Ok((caustic, global, saved))
+}
+
+/// Bytes one stored photon costs while its map is traced and used: the 20-byte record, about
+/// 16 bytes of kd-tree (a point and an index), and the tracer's 48-byte record of it (four
+/// vectors) that lives until the map is built.
+pub const BYTES_PER_PHOTON: u64 = 20 + 16 + 48;
+/// Extra bytes a caustic photon costs with the diffusion estimate: its gradient.
+pub const GRADIENT_BYTES: u64 = 12;
+/// Bytes a pixel costs: the linear image, its checked copy and the encoded file in memory.
+pub const BYTES_PER_PIXEL: u64 = 40;
+/// What is assumed available when /proc/meminfo cannot be read.
+pub const FALLBACK_MEMORY: u64 = 16 << 30;
+
+/// Estimated peak memory of the photon maps and the image, in bytes (saturating). Loaded
+/// maps need no tracing records, so for them this is an overestimate.
+pub fn memory_estimate(wanted: &[MapInfo], diffusion: bool, width: u32, height: u32) -> u64 {
+    let photons = wanted.iter().fold(0u64, |sum, info| {
+        let per = BYTES_PER_PHOTON
+            + if diffusion && info.kind == MapKind::Caustic {
+                GRADIENT_BYTES
+            } else {
+                0
+            };
+        sum.saturating_add(info.target.saturating_mul(per))
+    });
+    photons.saturating_add((width as u64 * height as u64).saturating_mul(BYTES_PER_PIXEL))
+}
+
+/// Memory available to this process: MemAvailable from /proc/meminfo, else
+/// [`FALLBACK_MEMORY`]; with where the figure comes from.
+pub fn available_memory() -> (u64, &'static str) {
+    let from_meminfo = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kib.saturating_mul(1024))
+        });
+    match from_meminfo {
+        Some(bytes) => (bytes, "MemAvailable in /proc/meminfo"),
+        None => (
+            FALLBACK_MEMORY,
+            "a fixed cap; /proc/meminfo could not be read",
+        ),
+    }
+}
+
+/// Bytes in binary units, e.g. "3.7 GiB".
+pub fn human_bytes(bytes: u64) -> String {
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < units.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} bytes")
+    } else {
+        format!("{value:.1} {}", units[unit])
+    }
+}
+
+/// Refuses, before anything is allocated, photon counts (and an image size) that would not
+/// fit in memory.
+fn check_memory(args: &RenderArgs, world: &World, wanted: &[MapInfo]) -> Result<(), RenderError> {
+    let camera = &world.description.camera;
+    let diffusion = args.estimate.estimator == EstimatorKind::Diffusion;
+    let needed = memory_estimate(wanted, diffusion, camera.width, camera.height);
+    let (available, source) = available_memory();
+    if needed <= available {
+        return Ok(());
+    }
+    let mut what: Vec<String> = wanted
+        .iter()
+        .map(|w| match w.kind {
+            MapKind::Caustic => format!("--caustic-photons {}", w.target),
+            MapKind::Global { .. } => format!("--global-photons {}", w.target),
+        })
+        .collect();
+    what.push(format!(
+        "a {}x{} image (camera.resolution)",
+        camera.width, camera.height
+    ));
+    Err(RenderError::Invalid(format!(
+        "{} would need about {} of memory ({} bytes a photon{}, {BYTES_PER_PIXEL} a pixel), but \
+         only {} is available ({source}); lower the photon counts or the resolution",
+        what.join(", "),
+        human_bytes(needed),
+        BYTES_PER_PHOTON,
+        if diffusion {
+            format!(", {} with a gradient", BYTES_PER_PHOTON + GRADIENT_BYTES)
+        } else {
+            String::new()
+        },
+        human_bytes(available),
+    )))
 }

@@ -327,6 +327,9 @@ fn read_library(
 ) -> Result<(MtlLibrary, tobj::MTLLoadResult), Result<SceneError, String>> {
     let text = read_text(path)
         .map_err(|why| Err(format!("material library `{}` {why}", path.display())))?;
+    if let Err((line, why)) = check_mtl_colours(&text) {
+        return Err(Ok(located(path, line, "", why)));
+    }
     let consumed = Cell::new(0);
     let result = tobj::load_mtl_buf(&mut CountingReader::new(text.as_bytes(), &consumed));
     match result {
@@ -386,6 +389,25 @@ fn check_obj_numbers(text: &str) -> Result<(), (usize, String)> {
         }
         if what == "vertex normal" && numbers.len() == 3 && numbers.iter().all(|&x| x == 0.0) {
             return Err((i + 1, "vertex normal has zero length".into()));
+        }
+    }
+    Ok(())
+}
+
+/// Rejects colour statements with fewer than three numbers, on which tobj 4 panics (the MTL
+/// format allows `Kd r` alone, meaning grey; tobj does not).
+fn check_mtl_colours(text: &str) -> Result<(), (usize, String)> {
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let Some(keyword @ ("Ka" | "Kd" | "Ks" | "Ke")) = words.next() else {
+            continue;
+        };
+        let count = words.count();
+        if count < 3 {
+            return Err((
+                i + 1,
+                format!("{keyword} needs three numbers (r g b), found {count}"),
+            ));
         }
     }
     Ok(())
@@ -472,6 +494,15 @@ mod tests {
         assert_eq!(mtl_line(text, "b", "Kd"), 6);
         assert_eq!(mtl_line(text, "b", "Ni"), 4);
         assert_eq!(mtl_line(text, "a", "Kd"), 2);
+    }
+
+    #[test]
+    fn short_mtl_colours_are_refused_before_tobj_sees_them() {
+        assert!(check_mtl_colours("newmtl a\nKd 0.1 0.2 0.3\nKs 1 1 1 extra\n").is_ok());
+        let (line, why) = check_mtl_colours("newmtl a\n# Kd\nKd 0.3 0.3\n").unwrap_err();
+        assert_eq!(line, 3);
+        assert!(why.contains("Kd needs three numbers"), "{why}");
+        assert_eq!(check_mtl_colours("Ke\n").unwrap_err().0, 1);
     }
 
     #[test]

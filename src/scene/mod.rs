@@ -113,6 +113,9 @@ pub struct SceneError {
 pub struct LoadReport {
     /// Zero-area mesh triangles left out (they would give NaN normals).
     pub degenerate_triangles_dropped: usize,
+    /// Problems that do not stop a render but probably spoil it (e.g. a light sealed inside
+    /// a closed opaque object the camera is outside of).
+    pub warnings: Vec<String>,
 }
 
 /// Reads and checks the scene file at `path`; mesh files resolve relative to its folder.
@@ -131,9 +134,30 @@ pub fn load_with_report(path: &Path) -> Result<(SceneDescription, LoadReport), S
     if path.is_dir() {
         return Err(whole_file_error("is a directory, not a scene file".into()));
     }
-    let text = std::fs::read_to_string(path)
+    let bytes = std::fs::read(path)
         .map_err(|err| whole_file_error(format!("cannot read the scene file: {err}")))?;
+    let text = String::from_utf8(bytes).map_err(|err| not_utf8(path, err))?;
     parse(&text, path)
+}
+
+/// A scene file that is not UTF-8 text: the error points at the first bad byte's line.
+fn not_utf8(path: &Path, err: std::string::FromUtf8Error) -> SceneError {
+    let bytes = err.as_bytes();
+    let at = err.utf8_error().valid_up_to();
+    let line_start = bytes[..at]
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    SceneError {
+        file: path.to_path_buf(),
+        line: Some(1 + bytes[..at].iter().filter(|&&b| b == b'\n').count()),
+        field: "scene".into(),
+        message: format!(
+            "is not UTF-8 text: byte 0x{:02x} at column {} is not valid UTF-8",
+            bytes[at],
+            1 + at - line_start
+        ),
+    }
 }
 
 /// Reads a scene from `text` as if it were the file `source` (which names it in errors and
@@ -184,5 +208,6 @@ pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport)
         materials: materials.into_materials(),
         shapes,
     };
+    report.warnings = validate::enclosed_light_warnings(&scene);
     Ok((scene, report))
 }

@@ -308,3 +308,105 @@ fn ior(doc: &Document, path: &str, x: f32) -> Result<f32, SceneError> {
         ))
     }
 }
+
+/// Warnings (not errors) for lights sealed inside a closed opaque object that the camera is
+/// outside of: such a light cannot brighten anything the camera sees. A light inside a closed
+/// room with the camera, or inside glass, is fine and gives none. Closed means a sphere, or a
+/// triangle mesh (one material's part of an OBJ, or a quad... which is never closed) in which
+/// every edge is shared by exactly two triangles; inside is decided by ray parity.
+pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<String> {
+    let opaque = |m: u32| !matches!(scene.materials[m as usize], Material::Glass { .. });
+    let mut warnings = Vec::new();
+    for (s, shape) in scene.shapes.iter().enumerate() {
+        let inside: Box<dyn Fn(Vec3) -> bool> = match shape {
+            Shape::Sphere {
+                center,
+                radius,
+                material,
+            } if opaque(*material) => {
+                let (c, r) = (*center, *radius);
+                Box::new(move |p: Vec3| p.distance_squared(c) < r * r)
+            }
+            Shape::Triangles(mesh) if opaque(mesh.material) && is_closed(mesh) => {
+                Box::new(move |p: Vec3| inside_closed_mesh(mesh, p))
+            }
+            _ => continue,
+        };
+        if inside(scene.camera.position) {
+            continue;
+        }
+        for (l, light) in scene.lights.iter().enumerate() {
+            let at = match light {
+                Light::Point { position, .. } => *position,
+                Light::Sphere { center, .. } => *center,
+                Light::Quad {
+                    corner,
+                    edge_u,
+                    edge_v,
+                    ..
+                } => *corner + 0.5 * (*edge_u + *edge_v),
+            };
+            if inside(at) {
+                let what = match shape {
+                    Shape::Sphere { .. } => "an opaque sphere",
+                    Shape::Triangles(_) => "a closed opaque mesh",
+                };
+                warnings.push(format!(
+                    "lights[{l}] is inside {what} (shape {s}) and the camera is outside it: \
+                     none of its light can reach the picture"
+                ));
+            }
+        }
+    }
+    warnings
+}
+
+/// Every edge shared by exactly two triangles (vertices compared by position, since OBJ
+/// faces split by normals repeat positions).
+fn is_closed(mesh: &TriangleMesh) -> bool {
+    let key = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
+    let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+    for &[a, b, c] in &mesh.triangles {
+        for (p, q) in [(a, b), (b, c), (c, a)] {
+            let (p, q) = (key(p), key(q));
+            *edges
+                .entry(if p < q { (p, q) } else { (q, p) })
+                .or_default() += 1;
+        }
+    }
+    !edges.is_empty() && edges.values().all(|&n| n == 2)
+}
+
+/// Ray parity along a fixed, axis-avoiding direction.
+fn inside_closed_mesh(mesh: &TriangleMesh, p: Vec3) -> bool {
+    let d = Vec3::new(0.5773, 0.5917, 0.5628).normalize();
+    let mut crossings = 0;
+    for &[a, b, c] in &mesh.triangles {
+        let (v0, v1, v2) = (
+            mesh.positions[a as usize],
+            mesh.positions[b as usize],
+            mesh.positions[c as usize],
+        );
+        // Möller–Trumbore.
+        let (e1, e2) = (v1 - v0, v2 - v0);
+        let h = d.cross(e2);
+        let det = e1.dot(h);
+        if det.abs() < 1e-12 * e1.length_squared().max(e2.length_squared()) {
+            continue;
+        }
+        let s = p - v0;
+        let u = s.dot(h) / det;
+        if !(0.0..=1.0).contains(&u) {
+            continue;
+        }
+        let q = s.cross(e1);
+        let v = d.dot(q) / det;
+        if v < 0.0 || u + v > 1.0 {
+            continue;
+        }
+        if e2.dot(q) / det > 0.0 {
+            crossings += 1;
+        }
+    }
+    crossings % 2 == 1
+}

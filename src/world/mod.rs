@@ -136,7 +136,9 @@ impl World {
         let accel = builder.commit()?;
         let specular_bounds = (spec_lo.x <= spec_hi.x).then(|| BoundingSphere {
             center: 0.5 * (spec_lo + spec_hi),
-            radius: 0.5 * (spec_hi - spec_lo).length() * 1.001 + 1e-6,
+            // Relative margin only: an absolute one changes the aim, and so the picture,
+            // with the scene's units (valid shapes always have extent, so this is > 0).
+            radius: 0.5 * (spec_hi - spec_lo).length() * 1.001,
         });
         let scale = if lo.x <= hi.x {
             (hi - lo).length().max(1e-12)

@@ -1,0 +1,861 @@
+//! Photon map files (`dpm render --save-photons` / `--load-photons`), so a long photon pass is
+//! never redone. Owns the file format and the check that a stored map fits a render; knows
+//! nothing of estimates or images.
+//!
+//! Format, version 1 (every number little-endian):
+//!
+//! | offset | bytes | content |
+//! |---|---|---|
+//! | 0 | 8 | magic `DPMPHMAP` |
+//! | 8 | 4 | format version (u32) = 1 |
+//! | 12 | 4 | number of maps n (u32, 0 to 2) |
+//! | 16 | 8 | scene fingerprint (u64, [`scene_fingerprint`]) |
+//! | 24 | 8 | seed (u64) |
+//! | 32 | 32 n | per map: kind (u32: 0 caustic, 1 global, 2 global with direct hits), 0 (u32), photons asked for (u64), paths emitted (u64), photons stored (u64) |
+//! | … | 20 per photon | each map's photons in turn: position x, y, z (f32 bits), power (RGBE, 4 bytes), direction and normal (octahedral, 2 bytes each) |
+//! | end − 8 | 8 | checksum: FNV-1a 64 of every byte before it |
+//!
+//! Photons are stored in the order tracing produced them (the order given to
+//! [`PhotonMap::build`]), not in tree order, so a loaded map is rebuilt into exactly the same
+//! tree and every estimate, and so the image, is identical to one from the traced map.
+//!
+//! Reading refuses, each with its own error naming the file: a file that does not start with
+//! the magic (a foreign file), another format version, a file shorter or longer than its
+//! header says (truncated), a checksum mismatch (corrupt), and impossible contents. Writing is
+//! atomic (temporary file, sync, rename), like the images.
+
+use super::tracer::MapKind;
+use super::{Photon, PhotonMap};
+use crate::image_io::{self, ImageError};
+use crate::scene::{Light, Material, SceneDescription, Shape};
+use glam::Vec3;
+use std::fs::File;
+use std::io::{self, BufReader, Read, Write};
+use std::path::{Path, PathBuf};
+
+pub const MAGIC: [u8; 8] = *b"DPMPHMAP";
+pub const VERSION: u32 = 1;
+const FIXED_HEADER: u64 = 32;
+const MAP_HEADER: u64 = 32;
+const PHOTON_BYTES: u64 = 20;
+const CHECKSUM_BYTES: u64 = 8;
+/// Photons encoded or decoded per chunk while streaming.
+const CHUNK_PHOTONS: usize = 1 << 14;
+
+/// Which map, and for how many photons it was traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MapInfo {
+    pub kind: MapKind,
+    /// Photons the pass was asked to store (`--caustic-photons` / `--global-photons`).
+    pub target: u64,
+}
+
+/// A map read from a file.
+#[derive(Clone, Debug)]
+pub struct StoredMap {
+    pub info: MapInfo,
+    /// Rebuilt from the stored photons; `emitted` as stored.
+    pub map: PhotonMap,
+}
+
+/// A photon map file's contents.
+#[derive(Clone, Debug)]
+pub struct PhotonFile {
+    pub path: PathBuf,
+    pub scene: u64,
+    pub seed: u64,
+    pub maps: Vec<StoredMap>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("{path}: cannot read the photon map file: {source}")]
+    Read { path: PathBuf, source: io::Error },
+    #[error("{0}")]
+    Write(#[from] ImageError),
+    #[error("{path}: not a dpm photon map file (it does not start with \"DPMPHMAP\")")]
+    Foreign { path: PathBuf },
+    #[error(
+        "{path}: photon map file format version {found}, but this dpm reads version {supported} \
+         only; trace the photons again"
+    )]
+    UnsupportedVersion {
+        path: PathBuf,
+        found: u32,
+        supported: u32,
+    },
+    #[error(
+        "{path}: truncated photon map file: it has {actual} bytes where its header needs \
+         {expected}"
+    )]
+    Truncated {
+        path: PathBuf,
+        expected: u64,
+        actual: u64,
+    },
+    #[error(
+        "{path}: photon map file is corrupt: checksum {computed:016x} does not match the stored \
+         {stored:016x}"
+    )]
+    Checksum {
+        path: PathBuf,
+        stored: u64,
+        computed: u64,
+    },
+    #[error("{path}: photon map file is corrupt: {reason}")]
+    Corrupt { path: PathBuf, reason: String },
+    #[error("{path}: {reason}; trace the photons again (leave out --load-photons)")]
+    Mismatch { path: PathBuf, reason: String },
+}
+
+impl StoreError {
+    /// 1 when writing failed on the way (disk full, permissions), 2 for a bad file or path.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            StoreError::Write(ImageError::Io { .. } | ImageError::Encode { .. }) => 1,
+            _ => 2,
+        }
+    }
+}
+
+/// FNV-1a, 64 bit: the file checksum and the scene fingerprint.
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv64(u64);
+
+impl Default for Fnv64 {
+    fn default() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv64 {
+    pub fn update(&mut self, bytes: &[u8]) {
+        let mut h = self.0;
+        for &b in bytes {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        self.0 = h;
+    }
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+    fn u32(&mut self, x: u32) {
+        self.update(&x.to_le_bytes());
+    }
+    fn u64(&mut self, x: u64) {
+        self.update(&x.to_le_bytes());
+    }
+    fn f32(&mut self, x: f32) {
+        self.u32(x.to_bits());
+    }
+    fn vec3(&mut self, v: Vec3) {
+        v.to_array().into_iter().for_each(|x| self.f32(x));
+    }
+}
+
+/// A fingerprint of everything photon tracing reads from a scene: lights, materials and
+/// shapes after loading (mesh files included, since their triangles are), bit for bit. The
+/// camera is left out: a map stays valid for another view or resolution of the same scene.
+pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
+    let mut h = Fnv64::default();
+    h.update(b"dpm photon scene v1");
+    h.u64(scene.lights.len() as u64);
+    for light in &scene.lights {
+        match light {
+            Light::Point { position, power } => {
+                h.u32(0);
+                h.vec3(*position);
+                h.vec3(*power);
+            }
+            Light::Sphere {
+                center,
+                radius,
+                power,
+            } => {
+                h.u32(1);
+                h.vec3(*center);
+                h.f32(*radius);
+                h.vec3(*power);
+            }
+            Light::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                power,
+            } => {
+                h.u32(2);
+                h.vec3(*corner);
+                h.vec3(*edge_u);
+                h.vec3(*edge_v);
+                h.vec3(*power);
+            }
+        }
+    }
+    h.u64(scene.materials.len() as u64);
+    for material in &scene.materials {
+        match material {
+            Material::Diffuse { albedo } => {
+                h.u32(0);
+                h.vec3(*albedo);
+            }
+            Material::Mirror => h.u32(1),
+            Material::Glass { ior } => {
+                h.u32(2);
+                h.f32(*ior);
+            }
+        }
+    }
+    h.u64(scene.shapes.len() as u64);
+    for shape in &scene.shapes {
+        match shape {
+            Shape::Sphere {
+                center,
+                radius,
+                material,
+            } => {
+                h.u32(0);
+                h.vec3(*center);
+                h.f32(*radius);
+                h.u32(*material);
+            }
+            Shape::Triangles(mesh) => {
+                h.u32(1);
+                h.u32(mesh.material);
+                h.u64(mesh.positions.len() as u64);
+                mesh.positions.iter().for_each(|&p| h.vec3(p));
+                match &mesh.normals {
+                    Some(normals) => {
+                        h.u32(1);
+                        normals.iter().for_each(|&n| h.vec3(n));
+                    }
+                    None => h.u32(0),
+                }
+                h.u64(mesh.triangles.len() as u64);
+                mesh.triangles.iter().flatten().for_each(|&i| h.u32(i));
+            }
+        }
+    }
+    h.finish()
+}
+
+fn kind_code(kind: MapKind) -> u32 {
+    match kind {
+        MapKind::Caustic => 0,
+        MapKind::Global { with_direct: false } => 1,
+        MapKind::Global { with_direct: true } => 2,
+    }
+}
+
+fn kind_from_code(code: u32) -> Option<MapKind> {
+    match code {
+        0 => Some(MapKind::Caustic),
+        1 => Some(MapKind::Global { with_direct: false }),
+        2 => Some(MapKind::Global { with_direct: true }),
+        _ => None,
+    }
+}
+
+fn kind_name(kind: MapKind) -> &'static str {
+    match kind {
+        MapKind::Caustic => "caustic",
+        MapKind::Global { .. } => "global",
+    }
+}
+
+fn count_flag(kind: MapKind) -> &'static str {
+    match kind {
+        MapKind::Caustic => "--caustic-photons",
+        MapKind::Global { .. } => "--global-photons",
+    }
+}
+
+/// A writer that hashes what passes through it.
+struct Hashing<'a, W: Write> {
+    out: &'a mut W,
+    hash: Fnv64,
+}
+
+impl<W: Write> Hashing<'_, W> {
+    fn put(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.hash.update(bytes);
+        self.out.write_all(bytes)
+    }
+}
+
+/// The map's photons in the order they were given to [`PhotonMap::build`].
+fn build_order(map: &PhotonMap) -> Vec<Photon> {
+    let mut photons = vec![Photon::default(); map.len()];
+    for (slot, photon) in map.photons().iter().enumerate() {
+        photons[map.tree().source_index(slot) as usize] = *photon;
+    }
+    photons
+}
+
+/// Writes `maps` (at most one of each kind) to `path` atomically; returns the file's size.
+pub fn write(
+    path: &Path,
+    scene: u64,
+    seed: u64,
+    maps: &[(MapInfo, &PhotonMap)],
+) -> Result<u64, StoreError> {
+    assert!(maps.len() <= 2, "at most a caustic and a global map");
+    let mut size = 0u64;
+    image_io::write_atomically(path, |out| {
+        let mut w = Hashing {
+            out,
+            hash: Fnv64::default(),
+        };
+        let mut header = Vec::with_capacity((FIXED_HEADER + MAP_HEADER * 2) as usize);
+        header.extend_from_slice(&MAGIC);
+        header.extend_from_slice(&VERSION.to_le_bytes());
+        header.extend_from_slice(&(maps.len() as u32).to_le_bytes());
+        header.extend_from_slice(&scene.to_le_bytes());
+        header.extend_from_slice(&seed.to_le_bytes());
+        for (info, map) in maps {
+            header.extend_from_slice(&kind_code(info.kind).to_le_bytes());
+            header.extend_from_slice(&0u32.to_le_bytes());
+            header.extend_from_slice(&info.target.to_le_bytes());
+            header.extend_from_slice(&map.emitted.to_le_bytes());
+            header.extend_from_slice(&(map.len() as u64).to_le_bytes());
+        }
+        w.put(&header).map_err(|e| e.to_string())?;
+        size += header.len() as u64;
+        let mut chunk = Vec::with_capacity(CHUNK_PHOTONS * PHOTON_BYTES as usize);
+        for (_, map) in maps {
+            for photons in build_order(map).chunks(CHUNK_PHOTONS) {
+                chunk.clear();
+                photons
+                    .iter()
+                    .for_each(|p| chunk.extend_from_slice(&p.to_le_bytes()));
+                w.put(&chunk).map_err(|e| e.to_string())?;
+                size += chunk.len() as u64;
+            }
+        }
+        let checksum = w.hash.finish();
+        w.out
+            .write_all(&checksum.to_le_bytes())
+            .map_err(|e| e.to_string())?;
+        size += CHECKSUM_BYTES;
+        Ok(())
+    })?;
+    Ok(size)
+}
+
+/// Reads and checks a photon map file, rebuilding its maps.
+pub fn read(path: &Path) -> Result<PhotonFile, StoreError> {
+    let read_error = |source| StoreError::Read {
+        path: path.to_path_buf(),
+        source,
+    };
+    let corrupt = |reason: String| StoreError::Corrupt {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let truncated = |expected: u64, actual: u64| StoreError::Truncated {
+        path: path.to_path_buf(),
+        expected,
+        actual,
+    };
+    if path.is_dir() {
+        return Err(read_error(io::Error::other(
+            "is a directory, not a photon map file",
+        )));
+    }
+    let file = File::open(path).map_err(read_error)?;
+    let actual = file.metadata().map_err(read_error)?.len();
+    let mut input = BufReader::with_capacity(1 << 20, file);
+    let mut hash = Fnv64::default();
+
+    // The fixed header: magic first, so a foreign file is called foreign even when short.
+    let mut fixed = [0u8; FIXED_HEADER as usize];
+    let have = read_up_to(&mut input, &mut fixed).map_err(read_error)?;
+    let magic_len = have.min(MAGIC.len());
+    if fixed[..magic_len] != MAGIC[..magic_len] {
+        return Err(StoreError::Foreign {
+            path: path.to_path_buf(),
+        });
+    }
+    let word = |i: usize| u32::from_le_bytes(fixed[i..i + 4].try_into().expect("4 bytes"));
+    let long = |i: usize| u64::from_le_bytes(fixed[i..i + 8].try_into().expect("8 bytes"));
+    if have >= 12 && word(8) != VERSION {
+        return Err(StoreError::UnsupportedVersion {
+            path: path.to_path_buf(),
+            found: word(8),
+            supported: VERSION,
+        });
+    }
+    if (have as u64) < FIXED_HEADER {
+        return Err(truncated(FIXED_HEADER, actual));
+    }
+    hash.update(&fixed);
+    let count = word(12);
+    if count > 2 {
+        return Err(corrupt(format!(
+            "{count} maps (at most 2: caustic and global)"
+        )));
+    }
+    let (scene, seed) = (long(16), long(24));
+
+    let headers_end = FIXED_HEADER + MAP_HEADER * count as u64;
+    if actual < headers_end {
+        return Err(truncated(headers_end, actual));
+    }
+    let mut headers = Vec::new();
+    for _ in 0..count {
+        let mut h = [0u8; MAP_HEADER as usize];
+        input.read_exact(&mut h).map_err(read_error)?;
+        hash.update(&h);
+        let long = |i: usize| u64::from_le_bytes(h[i..i + 8].try_into().expect("8 bytes"));
+        let code = u32::from_le_bytes(h[0..4].try_into().expect("4 bytes"));
+        // (kind code, target, emitted, stored); the kind is checked after the checksum.
+        headers.push((code, long(8), long(16), long(24)));
+    }
+    let expected = headers
+        .iter()
+        .try_fold(headers_end + CHECKSUM_BYTES, |acc, &(.., stored)| {
+            stored.checked_mul(PHOTON_BYTES)?.checked_add(acc)
+        })
+        .ok_or_else(|| corrupt("photon counts overflow".into()))?;
+    if actual < expected {
+        return Err(truncated(expected, actual));
+    }
+    if actual > expected {
+        return Err(corrupt(format!(
+            "{} bytes after the end its header gives ({expected} bytes)",
+            actual - expected
+        )));
+    }
+
+    // Photons, streamed: the file's size bounds every allocation.
+    let mut photon_lists = Vec::new();
+    let mut chunk = vec![0u8; CHUNK_PHOTONS * PHOTON_BYTES as usize];
+    for &(.., stored) in &headers {
+        let mut photons = Vec::with_capacity(stored as usize);
+        let mut left = stored as usize;
+        while left > 0 {
+            let n = left.min(CHUNK_PHOTONS);
+            let bytes = &mut chunk[..n * PHOTON_BYTES as usize];
+            input.read_exact(bytes).map_err(read_error)?;
+            hash.update(bytes);
+            photons.extend(
+                bytes
+                    .chunks_exact(PHOTON_BYTES as usize)
+                    .map(|b| Photon::from_le_bytes(b.try_into().expect("20 bytes"))),
+            );
+            left -= n;
+        }
+        photon_lists.push(photons);
+    }
+    let mut stored_checksum = [0u8; CHECKSUM_BYTES as usize];
+    input.read_exact(&mut stored_checksum).map_err(read_error)?;
+    let stored = u64::from_le_bytes(stored_checksum);
+    let computed = hash.finish();
+    if stored != computed {
+        return Err(StoreError::Checksum {
+            path: path.to_path_buf(),
+            stored,
+            computed,
+        });
+    }
+
+    // The checksum holds; now the contents must make sense.
+    let mut maps: Vec<StoredMap> = Vec::new();
+    for ((code, target, emitted, stored), photons) in headers.into_iter().zip(photon_lists) {
+        let kind =
+            kind_from_code(code).ok_or_else(|| corrupt(format!("unknown map kind {code}")))?;
+        if maps
+            .iter()
+            .any(|m| kind_name(m.info.kind) == kind_name(kind))
+        {
+            return Err(corrupt(format!("two {} maps", kind_name(kind))));
+        }
+        if stored > target || (stored > 0 && emitted == 0) {
+            return Err(corrupt(format!(
+                "{} map: {stored} photons stored from {emitted} paths for {target} asked for",
+                kind_name(kind)
+            )));
+        }
+        if let Some(i) = photons.iter().position(|p| !p.position().is_finite()) {
+            return Err(corrupt(format!(
+                "{} map: photon {i} has a non-finite position",
+                kind_name(kind)
+            )));
+        }
+        maps.push(StoredMap {
+            info: MapInfo { kind, target },
+            map: PhotonMap::build(photons, emitted),
+        });
+    }
+    Ok(PhotonFile {
+        path: path.to_path_buf(),
+        scene,
+        seed,
+        maps,
+    })
+}
+
+/// Reads until `buf` is full or the input ends; returns the bytes read.
+fn read_up_to(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+    let mut have = 0;
+    while have < buf.len() {
+        match input.read(&mut buf[have..]) {
+            Ok(0) => break,
+            Ok(n) => have += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(have)
+}
+
+impl PhotonFile {
+    /// Checks that the file holds exactly the maps a render would trace (`wanted`) for this
+    /// scene and seed, so using them gives the image tracing would give.
+    pub fn check_fits(&self, scene: u64, seed: u64, wanted: &[MapInfo]) -> Result<(), StoreError> {
+        let mismatch = |reason: String| StoreError::Mismatch {
+            path: self.path.clone(),
+            reason,
+        };
+        if self.scene != scene {
+            return Err(mismatch(
+                "its photons were traced in another scene (the lights, materials or geometry \
+                 differ from this scene's)"
+                    .into(),
+            ));
+        }
+        if self.seed != seed {
+            return Err(mismatch(format!(
+                "its photons were traced with --seed {}, this render uses --seed {seed}",
+                self.seed
+            )));
+        }
+        for want in wanted {
+            let name = kind_name(want.kind);
+            let Some(have) = self.maps.iter().find(|m| kind_name(m.info.kind) == name) else {
+                return Err(mismatch(format!(
+                    "it holds no {name} map, but this render needs one ({} {})",
+                    count_flag(want.kind),
+                    want.target
+                )));
+            };
+            if have.info.target != want.target {
+                return Err(mismatch(format!(
+                    "its {name} map was traced for {flag} {}, this render asks for {flag} {}",
+                    have.info.target,
+                    want.target,
+                    flag = count_flag(want.kind)
+                )));
+            }
+            if let (MapKind::Global { with_direct: had }, MapKind::Global { with_direct: wants }) =
+                (have.info.kind, want.kind)
+            {
+                if had == wants {
+                    continue;
+                }
+                let gather = |direct: bool| if direct { "> 0" } else { "0" };
+                return Err(mismatch(format!(
+                    "its global map was traced for --final-gather {}, this render uses \
+                     --final-gather {}",
+                    gather(had),
+                    gather(wants)
+                )));
+            }
+        }
+        for have in &self.maps {
+            let name = kind_name(have.info.kind);
+            if !wanted.iter().any(|w| kind_name(w.kind) == name) {
+                return Err(mismatch(format!(
+                    "it holds a {name} map ({} {}), but this render traces none",
+                    count_flag(have.info.kind),
+                    have.info.target
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Takes the map of `kind`'s family (caustic or global) out of the file.
+    pub fn take(&mut self, kind: MapKind) -> Option<PhotonMap> {
+        let i = self
+            .maps
+            .iter()
+            .position(|m| kind_name(m.info.kind) == kind_name(kind))?;
+        Some(self.maps.remove(i).map)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn photon(i: u32) -> Photon {
+        // Repeated coordinates on purpose: ties must not change the rebuilt tree.
+        let f = |k: u32| ((i * k) % 7) as f32 * 0.25;
+        Photon::new(
+            Vec3::new(f(3), f(5), (i % 3) as f32),
+            Vec3::new(0.001 * (i % 11 + 1) as f32, 0.002, 0.003),
+            Vec3::new(0.3, -1.0, 0.1).normalize(),
+            Vec3::Y,
+        )
+    }
+
+    fn map(n: u32, emitted: u64) -> PhotonMap {
+        PhotonMap::build((0..n).map(photon).collect(), emitted)
+    }
+
+    const CAUSTIC: MapInfo = MapInfo {
+        kind: MapKind::Caustic,
+        target: 500,
+    };
+    const GLOBAL: MapInfo = MapInfo {
+        kind: MapKind::Global { with_direct: true },
+        target: 300,
+    };
+
+    /// A file with a 500-photon caustic map and a 300-photon global map.
+    fn sample_file(dir: &Path) -> (PathBuf, PhotonMap, PhotonMap) {
+        let path = dir.join("maps.photons");
+        let (c, g) = (map(500, 9000), map(300, 1234));
+        let size = write(&path, 42, 7, &[(CAUSTIC, &c), (GLOBAL, &g)]).unwrap();
+        assert_eq!(size, std::fs::metadata(&path).unwrap().len());
+        assert_eq!(size, 32 + 2 * 32 + 800 * 20 + 8);
+        (path, c, g)
+    }
+
+    fn same_map(a: &PhotonMap, b: &PhotonMap) {
+        assert_eq!(a.photons(), b.photons());
+        assert_eq!(a.emitted, b.emitted);
+        for s in 0..a.len() {
+            assert_eq!(a.tree().source_index(s), b.tree().source_index(s));
+        }
+    }
+
+    #[test]
+    fn store_round_trip_rebuilds_the_same_maps() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, c, g) = sample_file(dir.path());
+        let mut file = read(&path).unwrap();
+        assert_eq!((file.scene, file.seed), (42, 7));
+        assert_eq!(file.maps.len(), 2);
+        assert_eq!(file.maps[0].info, CAUSTIC);
+        assert_eq!(file.maps[1].info, GLOBAL);
+        file.check_fits(42, 7, &[CAUSTIC, GLOBAL]).unwrap();
+        same_map(&file.take(MapKind::Caustic).unwrap(), &c);
+        same_map(&file.take(GLOBAL.kind).unwrap(), &g);
+        assert!(file.take(MapKind::Caustic).is_none());
+    }
+
+    #[test]
+    fn store_empty_and_mapless_files_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("none.photons");
+        write(&path, 1, 2, &[]).unwrap();
+        let file = read(&path).unwrap();
+        assert!(file.maps.is_empty());
+        write(&path, 1, 2, &[(CAUSTIC, &PhotonMap::build(Vec::new(), 0))]).unwrap();
+        let file = read(&path).unwrap();
+        assert!(file.maps[0].map.is_empty());
+    }
+
+    #[test]
+    fn store_photon_bytes_are_little_endian_field_by_field() {
+        let p = Photon::new(Vec3::new(1.0, -2.0, 0.5), Vec3::ONE, Vec3::Z, Vec3::Y);
+        let b = p.to_le_bytes();
+        assert_eq!(b[0..4], 1.0f32.to_le_bytes());
+        assert_eq!(b[4..8], (-2.0f32).to_le_bytes());
+        assert_eq!(b[8..12], 0.5f32.to_le_bytes());
+        assert_eq!(Photon::from_le_bytes(b), p);
+    }
+
+    #[test]
+    fn store_refuses_truncated_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, ..) = sample_file(dir.path());
+        let bytes = std::fs::read(&path).unwrap();
+        let cut = dir.path().join("cut.photons");
+        for len in [
+            0,
+            3,
+            8,
+            11,
+            12,
+            31,
+            32,
+            63,
+            96,
+            97,
+            1000,
+            bytes.len() - 8,
+            bytes.len() - 1,
+        ] {
+            std::fs::write(&cut, &bytes[..len]).unwrap();
+            match read(&cut) {
+                Err(StoreError::Truncated {
+                    path,
+                    expected,
+                    actual,
+                }) => {
+                    assert_eq!(path, cut);
+                    assert_eq!(actual, len as u64);
+                    assert!(expected > actual);
+                }
+                other => panic!("cut at {len}: {other:?}"),
+            }
+        }
+        let e = read(&cut).unwrap_err().to_string();
+        assert!(e.contains("cut.photons") && e.contains("truncated"), "{e}");
+    }
+
+    #[test]
+    fn store_refuses_foreign_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("image.png");
+        for bytes in [
+            &b"\x89PNG\r\n\x1a\n0000000000000000000000000000000000000000"[..],
+            b"PF\n2 2\n-1.0\n",
+            b"X",
+            b"DPMPHMAQ and more",
+        ] {
+            std::fs::write(&path, bytes).unwrap();
+            let e = read(&path).unwrap_err();
+            assert!(matches!(e, StoreError::Foreign { .. }), "{e:?}");
+            assert!(e.to_string().contains("image.png"), "{e}");
+            assert!(e.to_string().contains("not a dpm photon map"), "{e}");
+        }
+    }
+
+    #[test]
+    fn store_refuses_other_versions() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, ..) = sample_file(dir.path());
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[8..12].copy_from_slice(&2u32.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+        let e = read(&path).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                StoreError::UnsupportedVersion {
+                    found: 2,
+                    supported: 1,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("version 2"), "{e}");
+    }
+
+    #[test]
+    fn store_refuses_corrupt_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, ..) = sample_file(dir.path());
+        let good = std::fs::read(&path).unwrap();
+        // Flip one bit anywhere after the version: header fields, photons or the checksum.
+        for at in [13, 17, 29, 40, 100, 5000, good.len() - 9, good.len() - 1] {
+            let mut bytes = good.clone();
+            bytes[at] ^= 0x10;
+            std::fs::write(&path, &bytes).unwrap();
+            let e = read(&path).unwrap_err();
+            let ok = match &e {
+                StoreError::Checksum { .. } => true,
+                // A flipped count makes the size disagree with the header.
+                StoreError::Truncated { .. } | StoreError::Corrupt { .. } => at < 96,
+                _ => false,
+            };
+            assert!(ok, "flip at {at}: {e:?}");
+        }
+        let mut bytes = good.clone();
+        bytes.push(0);
+        std::fs::write(&path, &bytes).unwrap();
+        let e = read(&path).unwrap_err();
+        assert!(matches!(e, StoreError::Corrupt { .. }), "{e:?}");
+        assert!(e.to_string().contains("1 bytes after the end"), "{e}");
+    }
+
+    #[test]
+    fn store_refuses_missing_files_and_directories() {
+        let dir = tempfile::tempdir().unwrap();
+        for path in [dir.path().join("absent.photons"), dir.path().to_path_buf()] {
+            let e = read(&path).unwrap_err();
+            assert!(matches!(e, StoreError::Read { .. }), "{e:?}");
+            assert!(e.to_string().contains(&*path.to_string_lossy()), "{e}");
+        }
+        let e = write(&dir.path().join("no/such/dir/x.photons"), 0, 0, &[]).unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        assert_eq!(e.exit_code(), 2);
+    }
+
+    #[test]
+    fn store_refuses_maps_made_for_another_render() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, ..) = sample_file(dir.path());
+        let file = read(&path).unwrap();
+        let global_off = MapInfo {
+            kind: MapKind::Global { with_direct: false },
+            ..GLOBAL
+        };
+        let more = MapInfo {
+            target: 501,
+            ..CAUSTIC
+        };
+        let cases: &[(u64, u64, &[MapInfo], &str)] = &[
+            (43, 7, &[CAUSTIC, GLOBAL], "another scene"),
+            (
+                42,
+                8,
+                &[CAUSTIC, GLOBAL],
+                "--seed 7, this render uses --seed 8",
+            ),
+            (
+                42,
+                7,
+                &[more, GLOBAL],
+                "--caustic-photons 500, this render asks for --caustic-photons 501",
+            ),
+            (42, 7, &[CAUSTIC, global_off], "--final-gather"),
+            (42, 7, &[CAUSTIC], "holds a global map"),
+            (42, 7, &[GLOBAL], "holds a caustic map"),
+        ];
+        for &(scene, seed, wanted, fragment) in cases {
+            let e = file.check_fits(scene, seed, wanted).unwrap_err();
+            assert!(matches!(e, StoreError::Mismatch { .. }), "{e:?}");
+            let message = e.to_string();
+            assert!(message.contains(fragment), "{message}");
+            assert!(message.contains("maps.photons"), "{message}");
+        }
+        write(&path, 42, 7, &[]).unwrap();
+        let e = read(&path)
+            .unwrap()
+            .check_fits(42, 7, &[CAUSTIC])
+            .unwrap_err();
+        assert!(e.to_string().contains("holds no caustic map"), "{e}");
+    }
+
+    #[test]
+    fn store_scene_fingerprint_follows_what_tracing_sees() {
+        let text = "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\n\
+                    fov_y = 40\nresolution = [64, 48]\n\n[[lights]]\ntype = \"point\"\n\
+                    position = [0.0, 3.0, 0.0]\npower = [10, 10, 10]\n\n[materials.white]\n\
+                    type = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]\n\n[[objects]]\n\
+                    type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"white\"\n";
+        let fp = |t: &str| {
+            let (scene, _) = crate::scene::parse(t, Path::new("x.toml")).unwrap();
+            scene_fingerprint(&scene)
+        };
+        let base = fp(text);
+        assert_eq!(base, fp(text));
+        assert_eq!(
+            base,
+            fp(&text.replace("resolution = [64, 48]", "resolution = [8, 8]"))
+        );
+        assert_eq!(base, fp(&text.replace("fov_y = 40", "fov_y = 60")));
+        assert_ne!(
+            base,
+            fp(&text.replace("power = [10, 10, 10]", "power = [10, 10, 11]"))
+        );
+        assert_ne!(base, fp(&text.replace("radius = 1", "radius = 1.0001")));
+        assert_ne!(base, fp(&text.replace("albedo = [0.5,", "albedo = [0.6,")));
+    }
+}

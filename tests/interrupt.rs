@@ -1,0 +1,211 @@
+//! Interruption: a render stopped by Ctrl-C (or by `dpm::interrupt::request`) before, during
+//! photon tracing or during the eye pass returns `Interrupted` (exit code 130, "interrupted;
+//! OUT was not written"), leaves an earlier output file byte for byte as it was, and leaves no
+//! temporary file behind. The in-process cases share the process-wide flag, so they run one
+//! after another inside one test.
+
+mod reliability_support;
+
+use clap::Parser;
+use dpm::interrupt;
+use dpm::render::pipeline::{self, RenderArgs, RenderError};
+use reliability_support::*;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+#[derive(Parser)]
+struct Cli {
+    #[command(flatten)]
+    args: RenderArgs,
+}
+
+fn args(scene: &Path, output: &Path, extra: &[&str]) -> RenderArgs {
+    let mut all = vec![
+        "dpm".to_string(),
+        scene.display().to_string(),
+        "-o".into(),
+        output.display().to_string(),
+    ];
+    all.extend(extra.iter().map(|s| s.to_string()));
+    Cli::parse_from(all).args
+}
+
+/// Files in `dir` other than `keep` (a temporary file left behind would show up here).
+fn strays(dir: &Path, keep: &[&Path]) -> Vec<PathBuf> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| !keep.contains(&p.as_path()))
+        .collect()
+}
+
+/// Runs `args`, requesting an interruption after `delay` (None: before starting).
+fn interrupted_run(args: &RenderArgs, delay: Option<Duration>) -> (RenderError, Duration) {
+    interrupt::reset();
+    let start = Instant::now();
+    let result = std::thread::scope(|s| {
+        match delay {
+            None => interrupt::request(),
+            Some(d) => {
+                s.spawn(move || {
+                    std::thread::sleep(d);
+                    interrupt::request();
+                });
+            }
+        }
+        pipeline::run(args)
+    });
+    let elapsed = start.elapsed();
+    interrupt::reset();
+    match result {
+        Ok(_) => panic!("the render finished before the interruption ({elapsed:?})"),
+        Err(e) => (e, elapsed),
+    }
+}
+
+#[test]
+fn an_interrupted_render_writes_nothing_and_keeps_the_old_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "scene.toml", &caustic_scene(1.0, 1200, 900));
+    let output = dir.path().join("out.pfm");
+    let earlier = b"an earlier render, not to be touched".to_vec();
+    std::fs::write(&output, &earlier).unwrap();
+    let photons = dir.path().join("maps.photons");
+    let p = photons.to_str().unwrap();
+
+    // (what, extra flags, when, the photon file it must have saved)
+    let heavy_trace = ["--caustic-photons", "3000000", "--global-photons", "0"];
+    let heavy_render = [
+        "--caustic-photons",
+        "2000",
+        "--global-photons",
+        "0",
+        "--estimator",
+        "simple",
+        "--k",
+        "20",
+        "--spp",
+        "16",
+    ];
+    let cases: Vec<(&str, Vec<&str>, Option<Duration>, bool)> = vec![
+        ("before starting", vec!["--save-photons", p], None, false),
+        (
+            "while tracing",
+            [&heavy_trace[..], &["--save-photons", p]].concat(),
+            Some(Duration::from_millis(300)),
+            false,
+        ),
+        (
+            "while rendering",
+            [&heavy_render[..], &["--save-photons", p]].concat(),
+            Some(Duration::from_millis(1500)),
+            true,
+        ),
+    ];
+    for (what, extra, delay, saved) in cases {
+        let _ = std::fs::remove_file(&photons);
+        let (e, elapsed) = interrupted_run(&args(&scene, &output, &extra), delay);
+        eprintln!("{what}: {elapsed:?}");
+        assert!(
+            matches!(&e, RenderError::Interrupted { output: o, .. } if *o == output),
+            "{what}: {e:?}"
+        );
+        assert_eq!(e.exit_code(), 130, "{what}");
+        let message = e.to_string();
+        assert!(
+            message.starts_with(&format!(
+                "interrupted; {} was not written",
+                output.display()
+            )),
+            "{what}: {message}"
+        );
+        assert!(
+            elapsed < Duration::from_secs(60),
+            "{what}: stopped after {elapsed:?}"
+        );
+        assert_eq!(
+            std::fs::read(&output).unwrap(),
+            earlier,
+            "{what}: output changed"
+        );
+        assert_eq!(photons.exists(), saved, "{what}: photon file");
+        if saved {
+            // Maps traced before the interruption are kept, and the message says where.
+            assert!(message.contains("maps.photons"), "{message}");
+            assert!(dpm::photon::store::read(&photons).is_ok());
+        }
+        let keep = [output.as_path(), scene.as_path(), photons.as_path()];
+        assert!(
+            strays(dir.path(), &keep).is_empty(),
+            "{what}: {:?}",
+            strays(dir.path(), &keep)
+        );
+    }
+
+    // Cleared, the same render completes.
+    let small = write_scene(dir.path(), "small.toml", &caustic_scene(1.0, 8, 6));
+    let done = pipeline::run(&args(
+        &small,
+        &output,
+        &["--caustic-photons", "300", "--k", "10"],
+    ));
+    assert!(done.is_ok(), "{:?}", done.err());
+    assert_ne!(std::fs::read(&output).unwrap(), earlier);
+}
+
+#[test]
+fn ctrl_c_stops_the_binary_with_exit_130_and_keeps_the_old_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "scene.toml", &caustic_scene(1.0, 1500, 1000));
+    let output = dir.path().join("out.png");
+    let earlier = b"an earlier render".to_vec();
+    std::fs::write(&output, &earlier).unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dpm"))
+        .args([
+            "render".as_ref(),
+            scene.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+        ])
+        .args([
+            "--caustic-photons",
+            "0",
+            "--global-photons",
+            "0",
+            "--spp",
+            "64",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the render ended too soon to interrupt"
+    );
+    let sent = Instant::now();
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stopped = sent.elapsed();
+    assert_fails(
+        &out,
+        130,
+        &["interrupted; ", "out.png was not written"],
+        "Ctrl-C",
+    );
+    assert!(
+        stopped < Duration::from_secs(30),
+        "stopped {stopped:?} after Ctrl-C"
+    );
+    assert_eq!(std::fs::read(&output).unwrap(), earlier);
+    let keep = [output.as_path(), scene.as_path()];
+    assert!(
+        strays(dir.path(), &keep).is_empty(),
+        "{:?}",
+        strays(dir.path(), &keep)
+    );
+}

@@ -1,0 +1,97 @@
+//! Shared by the reliability tests (cli_errors, determinism, scale, interrupt): running the
+//! built `dpm` binary and writing small scenes into temporary folders.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub fn repo(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// `dpm ARGS`, run to completion.
+pub fn dpm<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    Command::new(env!("CARGO_BIN_EXE_dpm"))
+        .args(args)
+        .output()
+        .expect("the dpm binary runs")
+}
+
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Asserts exit code `code`, no panic, and stderr containing every fragment.
+pub fn assert_fails(out: &Output, code: i32, fragments: &[&str], what: &str) {
+    let err = stderr(out);
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "{what}: exit status; stderr:\n{err}"
+    );
+    assert!(!err.contains("panicked"), "{what}: panicked:\n{err}");
+    for f in fragments {
+        assert!(err.contains(f), "{what}: stderr lacks {f:?}:\n{err}");
+    }
+}
+
+pub fn assert_succeeds(out: &Output, what: &str) {
+    assert!(
+        out.status.success(),
+        "{what}: exit {:?}\n{}",
+        out.status.code(),
+        stderr(out)
+    );
+}
+
+/// A small caustic scene in scene units scaled by `s`: a point light (power scaled by s², so
+/// irradiance is unchanged) over a glass sphere and a mirror sphere standing on a diffuse
+/// floor in front of a diffuse back wall. Point lights only: they have no geometry of their own.
+pub fn caustic_scene(s: f64, width: u32, height: u32) -> String {
+    let v = |x: f64, y: f64, z: f64| format!("[{:e}, {:e}, {:e}]", x * s, y * s, z * s);
+    format!(
+        "[camera]\nposition = {}\nlook_at = {}\nup = [0.0, 1.0, 0.0]\nfov_y = 40.0\n\
+         resolution = [{width}, {height}]\n\n\
+         [[lights]]\ntype = \"point\"\nposition = {}\npower = [{p:e}, {p:e}, {p:e}]\n\n\
+         [materials.floor]\ntype = \"diffuse\"\nalbedo = [0.7, 0.7, 0.7]\n\n\
+         [materials.wall]\ntype = \"diffuse\"\nalbedo = [0.5, 0.6, 0.4]\n\n\
+         [materials.glass]\ntype = \"glass\"\nior = 1.5\n\n\
+         [materials.chrome]\ntype = \"mirror\"\n\n\
+         [[objects]]\ntype = \"quad\"\ncorner = {}\nedge_u = {}\nedge_v = {}\nmaterial = \"floor\"\n\n\
+         [[objects]]\ntype = \"quad\"\ncorner = {}\nedge_u = {}\nedge_v = {}\nmaterial = \"wall\"\n\n\
+         [[objects]]\ntype = \"sphere\"\ncenter = {}\nradius = {:e}\nmaterial = \"glass\"\n\n\
+         [[objects]]\ntype = \"sphere\"\ncenter = {}\nradius = {:e}\nmaterial = \"chrome\"\n",
+        v(0.0, 2.2, 3.2),
+        v(0.0, 0.3, 0.0),
+        v(0.6, 2.0, 0.4),
+        v(-2.0, 0.0, -1.5),
+        v(0.0, 0.0, 3.5),
+        v(4.0, 0.0, 0.0),
+        v(-2.0, 0.0, -1.5),
+        v(4.0, 0.0, 0.0),
+        v(0.0, 2.5, 0.0),
+        v(0.0, 0.5, 0.0),
+        0.45 * s,
+        v(-0.9, 0.3, -0.6),
+        0.3 * s,
+        p = 60.0 * s * s,
+    )
+}
+
+/// Writes `text` as `name` in `dir`; returns its path.
+pub fn write_scene(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Pixels of a PFM file (RGB triples, bottom row first, as stored).
+pub fn pfm_pixels(path: &Path) -> (usize, usize, Vec<f32>) {
+    let image = dpm::image_io::read_pfm(path).unwrap_or_else(|e| panic!("{e}"));
+    let values = image.pixels.iter().flat_map(|p| p.to_array()).collect();
+    (image.width, image.height, values)
+}
