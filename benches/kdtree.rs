@@ -34,7 +34,11 @@ impl Rng {
 
 /// A point on one of two surfaces: a tilted floor and an axis-aligned wall.
 fn on_surface(u: f32, v: f32, wall: bool) -> Vec3 {
-    if wall { Vec3::new(u, 0.95, v) } else { Vec3::new(u, v, 0.3 * u + 0.2 * v + 0.1) }
+    if wall {
+        Vec3::new(u, 0.95, v)
+    } else {
+        Vec3::new(u, v, 0.3 * u + 0.2 * v + 0.1)
+    }
 }
 
 /// Photon-like positions: a fifth on the wall, the rest on the floor, of which half gathered
@@ -61,7 +65,9 @@ fn photons(n: usize) -> Vec<Vec3> {
 /// Query points spread uniformly over both surfaces, like camera-ray hits.
 fn queries(n: usize) -> Vec<Vec3> {
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-    (0..n).map(|i| on_surface(rng.unit(), rng.unit(), i % 5 == 4)).collect()
+    (0..n)
+        .map(|i| on_surface(rng.unit(), rng.unit(), i % 5 == 4))
+        .collect()
 }
 
 fn dpm_queries(tree: &KdTree, queries: &[Vec3], k: usize) -> f64 {
@@ -113,7 +119,10 @@ fn kdtree(c: &mut Criterion) {
     let queries_arr: Vec<[f32; 3]> = queries.iter().map(|p| p.to_array()).collect();
 
     let mut build = c.benchmark_group("kdtree_build_1M");
-    build.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(5));
+    build
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5));
     build.throughput(Throughput::Elements(PHOTONS as u64));
     build.bench_function("dpm", |b| b.iter(|| KdTree::build(black_box(&points))));
     build.bench_function("kiddo", |b| {
@@ -125,12 +134,20 @@ fn kdtree(c: &mut Criterion) {
     let kiddo_tree = Kiddo::new_from_slice_parallel(&points_arr).unwrap();
     // Same answers (k-th distance of every query) before timing anything.
     for k in KS {
-        let (a, b) = (dpm_queries(&dpm_tree, &queries, k), kiddo_queries(&kiddo_tree, &queries_arr, k));
-        assert!((a - b).abs() <= 1e-9 * a.abs(), "k = {k}: dpm {a} vs kiddo {b}");
+        let (a, b) = (
+            dpm_queries(&dpm_tree, &queries, k),
+            kiddo_queries(&kiddo_tree, &queries_arr, k),
+        );
+        assert!(
+            (a - b).abs() <= 1e-9 * a.abs(),
+            "k = {k}: dpm {a} vs kiddo {b}"
+        );
     }
 
     let mut knn = c.benchmark_group("kdtree_k_nearest_1M_16k_queries");
-    knn.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(8));
+    knn.sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(8));
     knn.throughput(Throughput::Elements(QUERIES as u64));
     for k in KS {
         knn.bench_with_input(BenchmarkId::new("dpm", k), &k, |b, &k| {

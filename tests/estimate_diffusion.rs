@@ -58,7 +58,13 @@ fn energy_is_preserved_on_a_uniform_density() {
         ];
         let estimates: Vec<DiffusionEstimate> = configs
             .iter()
-            .map(|&(k, a, u)| with(r, |p| (p.diffusivity, p.alpha, p.units) = (k, a, u)))
+            // Noise left in the structure tensor (noise floor 0) squeezes kernels in every
+            // direction on a uniform density: exactly what energy preservation must survive.
+            .map(|&(k, a, u)| {
+                with(r, |p| {
+                    (p.diffusivity, p.alpha, p.units, p.noise_floor) = (k, a, u, 0.0)
+                })
+            })
             .collect();
         let mut per_map = vec![Vec::new(); estimates.len()];
         let mut lambda2 = vec![0.0f64; estimates.len()];
@@ -343,4 +349,89 @@ fn gradient_pass_is_deterministic_and_prepare_reuses_it() {
     // prepare finds the gradients and leaves them (a caller may time the pass on its own).
     with(1.0, |p| p.gradient_radius = 0.25).prepare(&mut map);
     assert_eq!(map.gradients(), Some(&serial[..]));
+}
+
+/// The photon-noise variance of the gradient (`gradient_noise`) matches the spread of the
+/// gradients the pass actually computes on a uniform density.
+#[test]
+fn gradient_noise_predicts_the_spread_of_gradients_on_a_uniform_density() {
+    let (n, rg) = (40_000usize, 0.04f32);
+    let mut rng = Rng(77);
+    let photons = uniform_rect(&mut rng, n, (0.0, 1.0), (0.0, 1.0), Vec3::splat(0.5));
+    let map = PhotonMap::build(photons, 0);
+    let gradients = compute_gradients(&map, rg);
+    // Photons away from the border, where the true gradient is zero.
+    let inner: Vec<Vec3> = (0..map.len())
+        .filter(|&s| {
+            let p = map.photon(s as u32).position();
+            p.x > 2.0 * rg && p.x < 1.0 - 2.0 * rg && p.y > 2.0 * rg && p.y < 1.0 - 2.0 * rg
+        })
+        .map(|s| gradients[s])
+        .collect();
+    let per_axis = inner
+        .iter()
+        .map(|g| 0.5 * (g.x as f64 * g.x as f64 + g.y as f64 * g.y as f64))
+        .sum::<f64>()
+        / inner.len() as f64;
+    // Σ Φ² per unit area of the uniform density: n photons of power 0.5 on the unit square.
+    let predicted = dpm::estimate::diffusion::gradient_noise(n as f64 * 0.25, rg as f64);
+    let ratio = per_axis / predicted;
+    assert!(
+        (ratio - 1.0).abs() < 0.1,
+        "measured {per_axis}, predicted {predicted}"
+    );
+}
+
+/// Removing the photon noise keeps the kernel round on a flat density where the paper's raw
+/// μ1 squeezes it, and leaves a real edge squeezed.
+#[test]
+fn noise_floor_keeps_flat_regions_round_and_edges_squeezed() {
+    let r = 0.05f32;
+    let per_disc = 400.0f32;
+    let n = (per_disc / (PI * r * r)) as usize;
+    let mut rng = Rng(9);
+    let photons = uniform_rect(&mut rng, n, (0.0, 1.0), (0.0, 1.0), Vec3::ONE);
+    let raw = with(r, |p| p.noise_floor = 0.0);
+    let debiased = with(r, |_| ());
+    let map = prepared(photons, &raw);
+    let queries: Vec<Query> = grid(2.0 * r, 1.0 - 2.0 * r, r)
+        .into_iter()
+        .map(|(x, y)| up(x, y))
+        .collect();
+    let mean_lambda2 = |e: &DiffusionEstimate| {
+        queries
+            .iter()
+            .map(|q| shape(e, &map, q).lambda2 as f64)
+            .sum::<f64>()
+            / queries.len() as f64
+    };
+    let (raw_l2, debiased_l2) = (mean_lambda2(&raw), mean_lambda2(&debiased));
+    assert!(
+        raw_l2 < 0.8,
+        "raw μ1 should read noise as structure: mean λ2 {raw_l2}"
+    );
+    assert!(
+        debiased_l2 > 0.95,
+        "noise floor should keep flat kernels round: {debiased_l2}"
+    );
+
+    let edge = step_edge_photons_for_noise_test();
+    let edge_map = prepared(edge, &debiased);
+    let at_edge = shape(&debiased, &edge_map, &up(0.5, 0.5));
+    assert!(at_edge.lambda2 < 0.05, "edge kernel λ2 {}", at_edge.lambda2);
+    assert!(at_edge.x1.y.abs() > 0.95, "edge direction {}", at_edge.x1);
+}
+
+/// A vertical step at x = 0.5: 4× brighter on the right, ~1000 photons per disc of r = 0.05.
+fn step_edge_photons_for_noise_test() -> Vec<Photon> {
+    let mut rng = Rng(11);
+    let mut photons = uniform_rect(&mut rng, 30_000, (0.0, 0.5), (0.0, 1.0), Vec3::ONE);
+    photons.extend(uniform_rect(
+        &mut rng,
+        120_000,
+        (0.5, 1.0),
+        (0.0, 1.0),
+        Vec3::ONE,
+    ));
+    photons
 }

@@ -14,13 +14,18 @@ struct Pcg32(u64);
 
 impl Pcg32 {
     fn new(seed: u64) -> Self {
-        let mut rng = Self(seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407));
+        let mut rng = Self(
+            seed.wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407),
+        );
         rng.next_u32();
         rng
     }
     fn next_u32(&mut self) -> u32 {
         let old = self.0;
-        self.0 = old.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = old
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
         xorshifted.rotate_right((old >> 59) as u32)
     }
@@ -59,7 +64,9 @@ fn two_planes(n: usize, seed: u64) -> Vec<Vec3> {
 
 fn flat_plane(n: usize, seed: u64) -> Vec<Vec3> {
     let mut rng = Pcg32::new(seed);
-    (0..n).map(|_| Vec3::new(rng.unit(), rng.unit(), 0.5)).collect()
+    (0..n)
+        .map(|_| Vec3::new(rng.unit(), rng.unit(), 0.5))
+        .collect()
 }
 
 fn line(n: usize, seed: u64) -> Vec<Vec3> {
@@ -79,20 +86,30 @@ fn duplicates(n: usize) -> Vec<Vec3> {
 /// A few distinct values per axis: many exact ties in coordinates and in distances.
 fn grid_ties(n: usize, seed: u64) -> Vec<Vec3> {
     let mut rng = Pcg32::new(seed);
-    (0..n).map(|_| Vec3::new(rng.below(4) as f32, rng.below(3) as f32, rng.below(2) as f32)).collect()
+    (0..n)
+        .map(|_| {
+            Vec3::new(
+                rng.below(4) as f32,
+                rng.below(3) as f32,
+                rng.below(2) as f32,
+            )
+        })
+        .collect()
 }
 
 /// Queries: random in and around the data's box, on data points, and far outside.
 fn queries(points: &[Vec3], count: usize, seed: u64) -> Vec<Vec3> {
     let mut rng = Pcg32::new(seed);
-    let (lo, hi) = points
-        .iter()
-        .fold((Vec3::ZERO, Vec3::ONE), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let (lo, hi) = points.iter().fold((Vec3::ZERO, Vec3::ONE), |(lo, hi), &p| {
+        (lo.min(p), hi.max(p))
+    });
     let size = (hi - lo).max(Vec3::splat(0.1));
     (0..count)
         .map(|i| match i % 4 {
             0 if !points.is_empty() => points[rng.below(points.len())],
-            1 if !points.is_empty() => points[rng.below(points.len())] + (rng.in_box() - 0.5) * 0.01,
+            1 if !points.is_empty() => {
+                points[rng.below(points.len())] + (rng.in_box() - 0.5) * 0.01
+            }
             2 => lo + (rng.in_box() * 3.0 - 1.0) * size,
             _ => lo + rng.in_box() * size,
         })
@@ -100,8 +117,11 @@ fn queries(points: &[Vec3], count: usize, seed: u64) -> Vec<Vec3> {
 }
 
 fn brute_dist2(points: &[Vec3], q: Vec3, max_dist2: f32) -> Vec<f32> {
-    let mut d: Vec<f32> =
-        points.iter().map(|p| p.distance_squared(q)).filter(|&d2| d2 <= max_dist2).collect();
+    let mut d: Vec<f32> = points
+        .iter()
+        .map(|p| p.distance_squared(q))
+        .filter(|&d2| d2 <= max_dist2)
+        .collect();
     d.sort_by(f32::total_cmp);
     d
 }
@@ -134,12 +154,23 @@ fn sorted_dist2(found: &[Neighbour]) -> Vec<f32> {
     d
 }
 
-fn check_k_nearest(tree: &KdTree, points: &[Vec3], q: Vec3, k: usize, max_dist2: f32, out: &mut Neighbours) {
+fn check_k_nearest(
+    tree: &KdTree,
+    points: &[Vec3],
+    q: Vec3,
+    k: usize,
+    max_dist2: f32,
+    out: &mut Neighbours,
+) {
     tree.k_nearest(q, k, max_dist2, out);
     let mut expected = brute_dist2(points, q, max_dist2);
     expected.truncate(k);
     check_neighbours_are_real(tree, q, out.as_slice());
-    assert_eq!(sorted_dist2(out.as_slice()), expected, "k = {k}, max_dist2 = {max_dist2}, q = {q}");
+    assert_eq!(
+        sorted_dist2(out.as_slice()),
+        expected,
+        "k = {k}, max_dist2 = {max_dist2}, q = {q}"
+    );
     assert_eq!(out.len(), expected.len());
     assert_eq!(out.is_empty(), expected.is_empty());
     assert_eq!(out.farthest().map(|n| n.dist2), expected.last().copied());
@@ -152,15 +183,24 @@ fn check_within(tree: &KdTree, points: &[Vec3], q: Vec3, radius2: f32, out: &mut
 
     tree.within_radius(q, radius2, out);
     check_neighbours_are_real(tree, q, out.as_slice());
-    let found: HashSet<u32> = out.as_slice().iter().map(|n| tree.source_index(n.slot as usize)).collect();
+    let found: HashSet<u32> = out
+        .as_slice()
+        .iter()
+        .map(|n| tree.source_index(n.slot as usize))
+        .collect();
     assert_eq!(found, expected, "radius2 = {radius2}, q = {q}");
     let farthest = sorted_dist2(out.as_slice()).last().copied();
     assert_eq!(out.farthest().map(|n| n.dist2), farthest);
 
     let mut visited = Vec::new();
-    tree.for_each_within(q, radius2, |slot, dist2| visited.push(Neighbour { dist2, slot }));
+    tree.for_each_within(q, radius2, |slot, dist2| {
+        visited.push(Neighbour { dist2, slot })
+    });
     check_neighbours_are_real(tree, q, &visited);
-    let found: HashSet<u32> = visited.iter().map(|n| tree.source_index(n.slot as usize)).collect();
+    let found: HashSet<u32> = visited
+        .iter()
+        .map(|n| tree.source_index(n.slot as usize))
+        .collect();
     assert_eq!(found, expected);
 }
 
@@ -186,7 +226,15 @@ const KS: [usize; 5] = [1, 7, 50, 400, 3000];
 
 #[test]
 fn random_points_of_every_size_match_brute_force() {
-    for (n, queries) in [(0, 4), (1, 8), (2, 8), (3, 8), (13, 8), (1000, 40), (100_000, 12)] {
+    for (n, queries) in [
+        (0, 4),
+        (1, 8),
+        (2, 8),
+        (3, 8),
+        (13, 8),
+        (1000, 40),
+        (100_000, 12),
+    ] {
         check_all(&random_box(n, n as u64 + 1), queries, &KS, n as u64);
     }
 }
@@ -248,7 +296,11 @@ fn nan_queries_k_zero_and_nan_limits_find_nothing() {
     let points = random_box(500, 14);
     let tree = KdTree::build(&points);
     let mut out = Neighbours::new();
-    for q in [Vec3::NAN, Vec3::new(0.5, f32::NAN, 0.5), Vec3::new(f32::INFINITY, 0.0, 0.0)] {
+    for q in [
+        Vec3::NAN,
+        Vec3::new(0.5, f32::NAN, 0.5),
+        Vec3::new(f32::INFINITY, 0.0, 0.0),
+    ] {
         tree.k_nearest(q, 10, f32::INFINITY, &mut out);
         assert!(out.is_empty());
         tree.within_radius(q, 10.0, &mut out);
@@ -297,13 +349,20 @@ fn sorted_neighbours_come_in_increasing_distance() {
 fn construction_is_deterministic_across_thread_counts() {
     let points = two_planes(300_000, 17);
     let build_on = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| KdTree::build(&points))
     };
     let one = build_on(1);
     let four = build_on(4);
     let slots: Vec<u32> = (0..one.len()).map(|s| one.source_index(s)).collect();
-    assert!((0..four.len()).map(|s| four.source_index(s)).eq(slots.iter().copied()));
+    assert!(
+        (0..four.len())
+            .map(|s| four.source_index(s))
+            .eq(slots.iter().copied())
+    );
     check_layout(&one, &points);
     let mut a = Neighbours::new();
     let mut b = Neighbours::new();
@@ -316,7 +375,8 @@ fn construction_is_deterministic_across_thread_counts() {
 
 fn small_point() -> impl Strategy<Value = Vec3> {
     // Coarse coordinates so that ties in coordinates and in distances are common.
-    (-4i8..=4, -4i8..=4, -2i8..=2).prop_map(|(x, y, z)| Vec3::new(x as f32, y as f32, z as f32 * 0.5))
+    (-4i8..=4, -4i8..=4, -2i8..=2)
+        .prop_map(|(x, y, z)| Vec3::new(x as f32, y as f32, z as f32 * 0.5))
 }
 
 proptest! {

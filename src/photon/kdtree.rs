@@ -50,7 +50,11 @@ impl Neighbours {
         Self::default()
     }
     pub fn with_capacity(k: usize) -> Self {
-        Self { items: Vec::with_capacity(k), keys: Vec::new(), farthest_at: 0 }
+        Self {
+            items: Vec::with_capacity(k),
+            keys: Vec::new(),
+            farthest_at: 0,
+        }
     }
     /// The neighbours found, in no particular order.
     pub fn as_slice(&self) -> &[Neighbour] {
@@ -73,7 +77,8 @@ impl Neighbours {
     /// Sorts the neighbours by increasing distance (ties by slot), for callers that want them
     /// in order. [`Neighbours::farthest`] stays valid.
     pub fn sort_by_distance(&mut self) {
-        self.items.sort_unstable_by(|a, b| a.dist2.total_cmp(&b.dist2).then(a.slot.cmp(&b.slot)));
+        self.items
+            .sort_unstable_by(|a, b| a.dist2.total_cmp(&b.dist2).then(a.slot.cmp(&b.slot)));
         self.farthest_at = self.items.len().saturating_sub(1);
     }
 }
@@ -164,7 +169,11 @@ impl KdTree {
         if root_dist2 > radius2 {
             return;
         }
-        let mut search = WithinRadius { query, radius2, visit: f };
+        let mut search = WithinRadius {
+            query,
+            radius2,
+            visit: f,
+        };
         self.descend(1, &mut offsets, &mut search);
     }
 
@@ -190,7 +199,11 @@ impl KdTree {
         }
         let axis = usize::from(self.axes[node]);
         let diff = search.query()[axis] - self.splits[node];
-        let (near, far) = if diff < 0.0 { (2 * node, 2 * node + 1) } else { (2 * node + 1, 2 * node) };
+        let (near, far) = if diff < 0.0 {
+            (2 * node, 2 * node + 1)
+        } else {
+            (2 * node + 1, 2 * node)
+        };
         self.descend(near, offsets, search);
         let saved = offsets[axis];
         offsets[axis] = diff;
@@ -248,4 +261,3 @@ impl<F: FnMut(u32, f32)> Search for WithinRadius<F> {
         }
     }
 }
-

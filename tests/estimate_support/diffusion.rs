@@ -22,6 +22,7 @@ pub fn params(r: f32) -> DiffusionParams {
         lambda3: 0.1,
         lambda2_floor: 0.01,
         kernel: DiffusionKernel::Epanechnikov,
+        noise_floor: 2.0,
     }
 }
 

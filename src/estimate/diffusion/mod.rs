@@ -79,6 +79,9 @@ pub struct DiffusionParams {
     /// Lower bound of `λ2`, `0 < floor ≤ 1`.
     pub lambda2_floor: f64,
     pub kernel: DiffusionKernel,
+    /// Multiple `c ≥ 0` of the expected photon-noise variance of the gradient subtracted from
+    /// `μ1` before the diffusivity (0: the paper's raw `μ1`). See [`gradient_noise`].
+    pub noise_floor: f64,
 }
 
 impl DiffusionParams {
@@ -109,6 +112,9 @@ impl DiffusionParams {
         if !(self.lambda2_floor > 0.0 && self.lambda2_floor <= 1.0) {
             return Err(("lambda2-floor", "must be in (0, 1]"));
         }
+        if !(self.noise_floor >= 0.0 && self.noise_floor.is_finite()) {
+            return Err(("noise-floor", "must be zero or positive and finite"));
+        }
         Ok(())
     }
 }
@@ -122,8 +128,10 @@ pub struct KernelShape {
     pub x1: Vec3,
     /// Across-edge direction `X2` (the structure tensor's major direction).
     pub x2: Vec3,
-    /// Major eigenvalue of the structure tensor, absolute units.
+    /// Major eigenvalue of the structure tensor, absolute units (before the noise is removed).
     pub mu1: f64,
+    /// Expected variance of one photon gradient per tangent axis from photon noise alone.
+    pub noise: f64,
     /// Minor eigenvalue of the structure tensor, absolute units.
     pub mu2: f64,
     /// The value compared with `K` (`μ1` or `μ1 r²/L̂²`).
@@ -182,6 +190,7 @@ impl DiffusionEstimate {
 
         let mut structure = StructureTensor::new(frame);
         let mut isotropic = 0.0;
+        let mut second_moment = 0.0;
         for n in scratch.neighbours.as_slice() {
             let photon = map.photon(n.slot);
             if !normals_agree(photon, normal) {
@@ -191,13 +200,18 @@ impl DiffusionEstimate {
             if d2 < rho2 {
                 structure.add(gradients[n.slot as usize], 1.0 - d2 / rho2);
             }
-            isotropic += RadialKernel::Epanechnikov.weight(d2 / r2) * scalar_power(photon);
+            let w = RadialKernel::Epanechnikov.weight(d2 / r2);
+            let phi = scalar_power(photon);
+            isotropic += w * phi;
+            second_moment += w * phi * phi;
         }
         let isotropic = isotropic / r2;
+        let noise = gradient_noise(second_moment / r2, p.gradient_radius as f64);
         let eigen = structure.average().eigen();
+        let signal = (eigen.major - p.noise_floor * noise).max(0.0);
         let contrast = match p.units {
-            DiffusivityUnits::Absolute => eigen.major,
-            DiffusivityUnits::Dimensionless => relative_contrast(eigen.major, r2, isotropic),
+            DiffusivityUnits::Absolute => signal,
+            DiffusivityUnits::Dimensionless => relative_contrast(signal, r2, isotropic),
         };
         let lambda2 = diffusivity(contrast, p.diffusivity, p.alpha).max(p.lambda2_floor);
         let across = frame.to_world(eigen.major_vector);
@@ -207,12 +221,25 @@ impl DiffusionEstimate {
             x1: tensor.x1.as_vec3(),
             x2: tensor.x2.as_vec3(),
             mu1: eigen.major,
+            noise,
             mu2: eigen.minor,
             contrast,
             isotropic,
         };
         (tensor, shape)
     }
+}
+
+/// Expected variance per tangent axis of the Eq. 6 gradient from photon noise alone, where the
+/// photons' `Σ Φ²` per unit area is `second_moment`: the gradient is a sum of independent
+/// terms `4/(π r_g⁴) (x_i − x) Φ_i`, so its variance is `(4/(π r_g⁴))² ∫ d_t² S dA` over the
+/// disc, `4 S / (π r_g⁴)`. The smoothed structure tensor of a flat region is this times the
+/// identity plus a fluctuation of similar size; the paper's `μ1` counts it as structure, which
+/// squeezes the kernel wherever photons are sparse. It scales like `μ1` with light power and
+/// scene size, so the dimensionless contrast stays invariant.
+pub fn gradient_noise(second_moment: f64, gradient_radius: f64) -> f64 {
+    let rg2 = gradient_radius * gradient_radius;
+    4.0 * second_moment / (std::f64::consts::PI * rg2 * rg2)
 }
 
 /// `μ1 r² / L̂²`; no estimate at all with a nonzero gradient nearby is maximal contrast.

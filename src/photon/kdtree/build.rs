@@ -40,7 +40,10 @@ impl Shape {
 
 pub(super) fn build(points: &[Vec3]) -> KdTree {
     let n = points.len();
-    assert!(n <= u32::MAX as usize, "a kd-tree holds at most u32::MAX points");
+    assert!(
+        n <= u32::MAX as usize,
+        "a kd-tree holds at most u32::MAX points"
+    );
     if n == 0 {
         return KdTree::default();
     }
@@ -55,10 +58,20 @@ pub(super) fn build(points: &[Vec3]) -> KdTree {
         points
             .par_iter()
             .enumerate()
-            .map(|(i, &position)| Item { position, source: i as u32 })
+            .map(|(i, &position)| Item {
+                position,
+                source: i as u32,
+            })
             .collect()
     } else {
-        points.iter().enumerate().map(|(i, &position)| Item { position, source: i as u32 }).collect()
+        points
+            .iter()
+            .enumerate()
+            .map(|(i, &position)| Item {
+                position,
+                source: i as u32,
+            })
+            .collect()
     };
     let nodes = Nodes {
         splits: (0..leaf_base).map(|_| AtomicU32::new(0)).collect(),
@@ -70,14 +83,24 @@ pub(super) fn build(points: &[Vec3]) -> KdTree {
     }
 
     let (points, source) = if n > PARALLEL_MIN_POINTS {
-        (items.par_iter().map(|it| it.position).collect(), items.par_iter().map(|it| it.source).collect())
+        (
+            items.par_iter().map(|it| it.position).collect(),
+            items.par_iter().map(|it| it.source).collect(),
+        )
     } else {
-        (items.iter().map(|it| it.position).collect(), items.iter().map(|it| it.source).collect())
+        (
+            items.iter().map(|it| it.position).collect(),
+            items.iter().map(|it| it.source).collect(),
+        )
     };
     KdTree {
         points,
         source,
-        splits: nodes.splits.into_iter().map(|s| f32::from_bits(s.into_inner())).collect(),
+        splits: nodes
+            .splits
+            .into_iter()
+            .map(|s| f32::from_bits(s.into_inner()))
+            .collect(),
         axes: nodes.axes.into_iter().map(AtomicU8::into_inner).collect(),
         depth,
         lower,
@@ -87,7 +110,14 @@ pub(super) fn build(points: &[Vec3]) -> KdTree {
 
 /// Partitions `items` (the points of inner node `node`, at tree level `level`) around the
 /// median of the axis where they spread most, records the split, and recurses.
-fn build_node(nodes: &Nodes, shape: Shape, node: usize, level: u32, items: &mut [Item], bounds: (Vec3, Vec3)) {
+fn build_node(
+    nodes: &Nodes,
+    shape: Shape,
+    node: usize,
+    level: u32,
+    items: &mut [Item],
+    bounds: (Vec3, Vec3),
+) {
     let (lower, upper) = bounds;
     let leaves_below = shape.depth - level;
     let first_leaf = ((node - (1 << level)) as u64) << leaves_below;
@@ -133,10 +163,10 @@ fn build_node(nodes: &Nodes, shape: Shape, node: usize, level: u32, items: &mut 
 
 fn bounds_maybe_parallel(items: &[Item]) -> (Vec3, Vec3) {
     if items.len() > 4 * PARALLEL_MIN_POINTS {
-        items
-            .par_chunks(PARALLEL_MIN_POINTS)
-            .map(bounds)
-            .reduce(|| (Vec3::INFINITY, Vec3::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)))
+        items.par_chunks(PARALLEL_MIN_POINTS).map(bounds).reduce(
+            || (Vec3::INFINITY, Vec3::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        )
     } else {
         bounds(items)
     }
@@ -144,7 +174,9 @@ fn bounds_maybe_parallel(items: &[Item]) -> (Vec3, Vec3) {
 
 /// Tight bounding box (min and max are exact, so the order of reduction does not matter).
 fn bounds(items: &[Item]) -> (Vec3, Vec3) {
-    items.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), it| {
-        (lo.min(it.position), hi.max(it.position))
-    })
+    items
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), it| {
+            (lo.min(it.position), hi.max(it.position))
+        })
 }

@@ -26,7 +26,13 @@ pub(super) fn k_nearest(
     keys.clear();
     if k <= cfg.0 {
         keys.reserve(k + 1);
-        let mut heap = Heap { query, k, max_dist2, bound: max_dist2, keys };
+        let mut heap = Heap {
+            query,
+            k,
+            max_dist2,
+            bound: max_dist2,
+            keys,
+        };
         tree.descend(1, &mut offsets, &mut heap);
         if keys.len() > k {
             keys.pop(); // the sentinel
@@ -39,7 +45,14 @@ pub(super) fn k_nearest(
     } else {
         let slack = (k * cfg.1 / 100).max(cfg.2);
         keys.resize(k + slack + LEAF_SIZE, 0);
-        let mut buffer = Buffer { query, k, capacity: k + slack, bound: max_dist2, keys, len: 0 };
+        let mut buffer = Buffer {
+            query,
+            k,
+            capacity: k + slack,
+            bound: max_dist2,
+            keys,
+            len: 0,
+        };
         tree.descend(1, &mut offsets, &mut buffer);
         let len = buffer.len;
         keys.truncate(len);
@@ -57,7 +70,12 @@ pub(super) fn k_nearest(
 fn dev_config() -> (usize, usize, usize) {
     static CFG: std::sync::OnceLock<(usize, usize, usize)> = std::sync::OnceLock::new();
     *CFG.get_or_init(|| {
-        let get = |n: &str, d: usize| std::env::var(n).ok().and_then(|s| s.parse().ok()).unwrap_or(d);
+        let get = |n: &str, d: usize| {
+            std::env::var(n)
+                .ok()
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(d)
+        };
         (get("HEAPK", 32), get("PCT", 50), get("MINSLACK", 8))
     })
 }
@@ -73,17 +91,27 @@ fn key_dist2(key: u64) -> f32 {
 }
 
 fn unpack(key: u64) -> Neighbour {
-    Neighbour { dist2: key_dist2(key), slot: key as u32 }
+    Neighbour {
+        dist2: key_dist2(key),
+        slot: key as u32,
+    }
 }
 
 fn position_of_max(keys: &[u64]) -> usize {
-    keys.iter().enumerate().max_by_key(|&(_, key)| key).map_or(0, |(i, _)| i)
+    keys.iter()
+        .enumerate()
+        .max_by_key(|&(_, key)| key)
+        .map_or(0, |(i, _)| i)
 }
 
 /// The largest float below `x` (for `x > 0`), or -1 (nothing passes) when `x` is 0: turns
 /// "strictly nearer than the k-th" into the inclusive test the traversal uses.
 fn just_below(x: f32) -> f32 {
-    if x > 0.0 { f32::from_bits(x.to_bits() - 1) } else { -1.0 }
+    if x > 0.0 {
+        f32::from_bits(x.to_bits() - 1)
+    } else {
+        -1.0
+    }
 }
 
 /// Small-k collector: unordered until it holds `k`, then a max-heap whose top is the k-th.
@@ -111,7 +139,9 @@ impl Search for Heap<'_> {
         let mut rest = leaf;
         let mut slot = first_slot;
         while self.keys.len() < self.k {
-            let Some((&p, tail)) = rest.split_first() else { return };
+            let Some((&p, tail)) = rest.split_first() else {
+                return;
+            };
             rest = tail;
             let dist2 = dist2(p, self.query);
             if dist2 <= self.max_dist2 {
@@ -240,7 +270,10 @@ mod tests {
 
     #[test]
     fn heap_keeps_the_largest_on_top() {
-        let mut heap: Vec<u64> = [3u64, 1, 4, 15, 5, 9, 2, 6].iter().map(|&d| d << 32).collect();
+        let mut heap: Vec<u64> = [3u64, 1, 4, 15, 5, 9, 2, 6]
+            .iter()
+            .map(|&d| d << 32)
+            .collect();
         heap.push(0);
         heapify(&mut heap);
         assert_eq!(heap[0] >> 32, 15);
@@ -258,7 +291,13 @@ mod tests {
             assert!(pack(w[0], 7) <= pack(w[1], 3) || w[0] == w[1]);
         }
         assert!(pack(0.5, 3) < pack(0.5, 4));
-        assert_eq!(unpack(pack(0.25, 42)), Neighbour { dist2: 0.25, slot: 42 });
+        assert_eq!(
+            unpack(pack(0.25, 42)),
+            Neighbour {
+                dist2: 0.25,
+                slot: 42
+            }
+        );
         assert_eq!(just_below(0.0), -1.0);
         assert!(just_below(1.0) < 1.0 && just_below(1.0) > 0.9999);
     }
