@@ -37,7 +37,7 @@ impl Pcg32 {
         Vec3::new(self.unit(), self.unit(), self.unit())
     }
     fn below(&mut self, n: usize) -> usize {
-        (self.next_u32() as u64 * n as u64 >> 32) as usize
+        ((self.next_u32() as u64 * n as u64) >> 32) as usize
     }
 }
 

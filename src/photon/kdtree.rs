@@ -133,7 +133,12 @@ impl KdTree {
     /// same distance as the k-th, which ones are returned is unspecified.
     pub fn k_nearest(&self, query: Vec3, k: usize, max_dist2: f32, out: &mut Neighbours) {
         out.clear();
-        if k == 0 || !query.is_finite() || !(max_dist2 >= 0.0) || self.points.is_empty() {
+        if k == 0
+            || !query.is_finite()
+            || max_dist2.is_nan()
+            || max_dist2 < 0.0
+            || self.points.is_empty()
+        {
             return;
         }
         let (offsets, root_dist2) = self.root_offsets(query);
@@ -162,7 +167,7 @@ impl KdTree {
     /// Calls `f(slot, dist2)` for every point with squared distance `<= radius2`, in no
     /// particular order. A non-finite query or a NaN radius finds nothing.
     pub fn for_each_within(&self, query: Vec3, radius2: f32, f: impl FnMut(u32, f32)) {
-        if !query.is_finite() || !(radius2 >= 0.0) || self.points.is_empty() {
+        if !query.is_finite() || radius2.is_nan() || radius2 < 0.0 || self.points.is_empty() {
             return;
         }
         let (mut offsets, root_dist2) = self.root_offsets(query);
