@@ -60,7 +60,9 @@ fn stable_with_zero_gradient_everywhere() {
 #[test]
 fn stable_with_diffusivity_zero_and_huge() {
     let photons = small_edge(6, 200.0, Vec3::ONE);
-    let zero = with(1.0, |p| p.diffusivity = 0.0);
+    // Noise floor 0: with the noise removed a flat stretch has no contrast at all, and K = 0
+    // would leave it round; here K = 0 must squeeze every kernel.
+    let zero = with(1.0, |p| (p.diffusivity, p.noise_floor) = (0.0, 0.0));
     let map = prepared(photons, &zero);
     let huge = with(1.0, |p| p.diffusivity = 1e300);
     for q in edge_queries() {
@@ -117,7 +119,9 @@ fn stable_with_lambda2_at_its_floor() {
     let r = 0.1;
     let iso = FixedRadiusEstimate::new(RadialKernel::Epanechnikov, r);
     for floor in [1e-6, 1e-2, 0.3] {
-        let d = with(r, |p| (p.diffusivity, p.lambda2_floor) = (0.0, floor));
+        let d = with(r, |p| {
+            (p.diffusivity, p.lambda2_floor, p.noise_floor) = (0.0, floor, 0.0)
+        });
         let map = prepared(photons.clone(), &d);
         let queries: Vec<Query> = grid(0.2, 0.8, 0.01)
             .into_iter()
