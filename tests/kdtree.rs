@@ -135,7 +135,6 @@ fn check_layout(tree: &KdTree, points: &[Vec3]) {
         assert!(!seen[src], "source index {src} appears twice");
         seen[src] = true;
         assert_eq!(tree.point(slot), points[src]);
-        assert_eq!(tree.points()[slot], points[src]);
     }
 }
 
@@ -219,6 +218,14 @@ fn check_all(points: &[Vec3], query_count: usize, ks: &[usize], seed: u64) {
         let radius = 0.2 * rng.unit();
         check_within(&tree, points, q, radius * radius, &mut out);
         check_within(&tree, points, q, 0.0, &mut out);
+        if !points.is_empty() {
+            // Limits equal to a point's distance: both queries include the boundary.
+            let exact = points[rng.below(points.len())].distance_squared(q);
+            check_within(&tree, points, q, exact, &mut out);
+            for &k in ks {
+                check_k_nearest(&tree, points, q, k, exact, &mut out);
+            }
+        }
     }
 }
 
@@ -315,6 +322,29 @@ fn nan_queries_k_zero_and_nan_limits_find_nothing() {
     assert!(out.is_empty());
     tree.within_radius(Vec3::splat(0.5), f32::NAN, &mut out);
     assert!(out.is_empty());
+}
+
+#[test]
+fn non_finite_points_do_not_panic() {
+    let mut points = random_box(3_000, 19);
+    for i in (0..points.len()).step_by(97) {
+        points[i] = [
+            Vec3::NAN,
+            Vec3::INFINITY,
+            Vec3::new(0.5, f32::NEG_INFINITY, f32::NAN),
+        ][i % 3];
+    }
+    let tree = KdTree::build(&points);
+    let mut sources: Vec<u32> = (0..tree.len()).map(|s| tree.source_index(s)).collect();
+    sources.sort_unstable();
+    assert!(sources.iter().copied().eq(0..points.len() as u32));
+    let mut out = Neighbours::new();
+    for q in queries(&points[1..50], 20, 20) {
+        tree.k_nearest(q, 30, f32::INFINITY, &mut out);
+        assert!(out.as_slice().iter().all(|n| n.dist2.is_finite()));
+        tree.within_radius(q, 0.01, &mut out);
+        assert!(out.as_slice().iter().all(|n| n.dist2 <= 0.01));
+    }
 }
 
 #[test]

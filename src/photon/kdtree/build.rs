@@ -82,19 +82,11 @@ pub(super) fn build(points: &[Vec3]) -> KdTree {
         build_node(&nodes, shape, 1, 0, &mut items, (lower, upper));
     }
 
-    let (points, source) = if n > PARALLEL_MIN_POINTS {
-        (
-            items.par_iter().map(|it| it.position).collect(),
-            items.par_iter().map(|it| it.source).collect(),
-        )
-    } else {
-        (
-            items.iter().map(|it| it.position).collect(),
-            items.iter().map(|it| it.source).collect(),
-        )
-    };
+    let (xs, ys, zs, source) = split_columns(&items);
     KdTree {
-        points,
+        xs,
+        ys,
+        zs,
         source,
         splits: nodes
             .splits
@@ -134,9 +126,30 @@ fn build_node(
     } else {
         2
     };
-    let (_, &mut median, _) =
-        items.select_nth_unstable_by(mid, |a, b| a.position[axis].total_cmp(&b.position[axis]));
-    let split = median.position[axis];
+    // One comparator per axis, so the selection's inner loop does not dispatch on `axis`.
+    let split = match axis {
+        0 => {
+            items
+                .select_nth_unstable_by(mid, |a, b| a.position.x.total_cmp(&b.position.x))
+                .1
+                .position
+                .x
+        }
+        1 => {
+            items
+                .select_nth_unstable_by(mid, |a, b| a.position.y.total_cmp(&b.position.y))
+                .1
+                .position
+                .y
+        }
+        _ => {
+            items
+                .select_nth_unstable_by(mid, |a, b| a.position.z.total_cmp(&b.position.z))
+                .1
+                .position
+                .z
+        }
+    };
     nodes.splits[node].store(split.to_bits(), Ordering::Relaxed);
     nodes.axes[node].store(axis as u8, Ordering::Relaxed);
 
@@ -179,4 +192,32 @@ fn bounds(items: &[Item]) -> (Vec3, Vec3) {
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), it| {
             (lo.min(it.position), hi.max(it.position))
         })
+}
+
+/// The items' coordinates and source indices as four arrays, in one pass (chunks in parallel
+/// for large inputs; each chunk writes only its own part of each array).
+fn split_columns(items: &[Item]) -> (Vec<f32>, Vec<f32>, Vec<f32>, Vec<u32>) {
+    let n = items.len();
+    let (mut xs, mut ys, mut zs, mut source) =
+        (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0; n]);
+    let write =
+        |items: &[Item], xs: &mut [f32], ys: &mut [f32], zs: &mut [f32], source: &mut [u32]| {
+            for (i, it) in items.iter().enumerate() {
+                (xs[i], ys[i], zs[i], source[i]) =
+                    (it.position.x, it.position.y, it.position.z, it.source);
+            }
+        };
+    if n > PARALLEL_MIN_POINTS {
+        let chunk = PARALLEL_MIN_POINTS;
+        items
+            .par_chunks(chunk)
+            .zip(xs.par_chunks_mut(chunk))
+            .zip(ys.par_chunks_mut(chunk))
+            .zip(zs.par_chunks_mut(chunk))
+            .zip(source.par_chunks_mut(chunk))
+            .for_each(|((((items, xs), ys), zs), source)| write(items, xs, ys, zs, source));
+    } else {
+        write(items, &mut xs, &mut ys, &mut zs, &mut source);
+    }
+    (xs, ys, zs, source)
 }
