@@ -66,6 +66,29 @@ pub fn render_image(
     seed: u64,
     progress: &ProgressBar,
 ) -> Image {
+    let w = camera.width as usize;
+    shade_pixels(camera, progress, |scratch, x, y| {
+        // Per pixel, not per row: a row through glass can take seconds.
+        if crate::interrupt::requested() {
+            return Vec3::ZERO;
+        }
+        let mut rng = Rng::for_index(seed, Stream::Pixels, (y * w + x) as u64);
+        let mut sum = Vec3::ZERO;
+        for s in 0..spp {
+            let (jx, jy) = if s == 0 { (0.5, 0.5) } else { rng.next_2d() };
+            let d = camera.direction(x as f32 + jx, y as f32 + jy);
+            sum += integrator.radiance(camera.origin(), d, 0, &mut rng, scratch);
+        }
+        sum / spp.max(1) as f32
+    })
+}
+
+/// Every pixel of the camera's image, rows in parallel, each thread with its own scratch.
+fn shade_pixels(
+    camera: &PinholeCamera,
+    progress: &ProgressBar,
+    shade: impl Fn(&mut Scratch, usize, usize) -> Vec3 + Sync,
+) -> Image {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let mut pixels = vec![Vec3::ZERO; w * h];
     pixels
@@ -73,18 +96,7 @@ pub fn render_image(
         .enumerate()
         .for_each_init(Scratch::default, |scratch, (y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
-                // Per pixel, not per row: a row through glass can take seconds.
-                if crate::interrupt::requested() {
-                    return;
-                }
-                let mut rng = Rng::for_index(seed, Stream::Pixels, (y * w + x) as u64);
-                let mut sum = Vec3::ZERO;
-                for s in 0..spp {
-                    let (jx, jy) = if s == 0 { (0.5, 0.5) } else { rng.next_2d() };
-                    let d = camera.direction(x as f32 + jx, y as f32 + jy);
-                    sum += integrator.radiance(camera.origin(), d, 0, &mut rng, scratch);
-                }
-                *px = sum / spp.max(1) as f32;
+                *px = shade(scratch, x, y);
             }
             progress.inc(1);
         });
@@ -106,43 +118,28 @@ pub fn render_kernel_field(
     estimate: &crate::estimate::DiffusionEstimate,
 ) -> Image {
     use crate::world::Surface;
-    let (w, h) = (camera.width as usize, camera.height as usize);
-    let mut pixels = vec![Vec3::ZERO; w * h];
-    pixels
-        .par_chunks_mut(w)
-        .enumerate()
-        .for_each_init(Scratch::default, |scratch, (y, row)| {
-            for (x, px) in row.iter_mut().enumerate() {
-                let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
-                let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY) else {
-                    continue;
-                };
-                let Surface::Material(m) = hit.surface else {
-                    continue;
-                };
-                if !matches!(world.material(m), crate::scene::Material::Diffuse { .. }) {
-                    continue;
-                }
-                let n = if d.dot(hit.geometric_normal) < 0.0 {
-                    hit.shading_normal
-                } else {
-                    -hit.shading_normal
-                };
-                let query = crate::estimate::Query {
-                    position: hit.position,
-                    normal: n,
-                };
-                let shape = estimate.kernel_at(map, &query, scratch);
-                let (t, b) = crate::sampling::basis(n);
-                *px = crate::density::kernel_field::colour(
-                    shape.x1.dot(b).atan2(shape.x1.dot(t)),
-                    shape.lambda2,
-                );
-            }
-        });
-    Image {
-        width: w,
-        height: h,
-        pixels,
-    }
+    shade_pixels(camera, &ProgressBar::hidden(), |scratch, x, y| {
+        let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+        let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY) else {
+            return Vec3::ZERO;
+        };
+        let Surface::Material(m) = hit.surface else {
+            return Vec3::ZERO;
+        };
+        if !matches!(world.material(m), crate::scene::Material::Diffuse { .. }) {
+            return Vec3::ZERO;
+        }
+        let n = if d.dot(hit.geometric_normal) < 0.0 {
+            hit.shading_normal
+        } else {
+            -hit.shading_normal
+        };
+        let query = crate::estimate::Query {
+            position: hit.position,
+            normal: n,
+        };
+        let shape = estimate.kernel_at(map, &query, scratch);
+        let (t, b) = crate::sampling::basis(n);
+        crate::density::kernel_field::colour(shape.x1.dot(b).atan2(shape.x1.dot(t)), shape.lambda2)
+    })
 }
