@@ -321,11 +321,7 @@ fn rotating_photons_and_query_leaves_estimates_unchanged() {
     let mut rng = Rng(77);
     for _ in 0..3 {
         let rot = rng.rotation();
-        let photons = base
-            .photons()
-            .iter()
-            .map(|p| rotate_photon(p, rot))
-            .collect();
+        let photons = base.photons().map(|p| rotate_photon(&p, rot)).collect();
         let rotated = PhotonMap::build(photons, 2000);
         for e in classic_estimates(30, 0.08) {
             for q in &queries {

@@ -405,7 +405,6 @@ material = "floor"
 /// Caustic photons on the receiving plane within `window` of `around`: (position, power).
 fn photons_near(map: &PhotonMap, plane_y: f64, around: DVec3, window: f64) -> Vec<(DVec3, f64)> {
     map.photons()
-        .iter()
         .map(|p| (dvec(p.position()), p.power().x as f64))
         .filter(|(x, _)| (x.y - plane_y).abs() < 1e-4 && (*x - around).length() < window)
         .collect()
@@ -571,7 +570,7 @@ fn map_counts_reach_the_target() {
         g.emitted < g.stored,
         "photons bounce between the walls: {g:?}"
     );
-    for photon in caustic.photons().iter().chain(global.photons()) {
+    for photon in caustic.photons().chain(global.photons()) {
         let x = photon.position();
         let on_wall = x.y.abs() < 1e-4
             || (x.y - 2.0).abs() < 1e-4
@@ -607,11 +606,11 @@ fn maps_are_identical_on_one_and_two_threads() {
         assert!(c1.emitted > 16_384, "{kind:?} took one batch only: {c1:?}");
         assert_eq!(c1, c2, "{kind:?}");
         assert_eq!(one.len(), target);
-        assert!(one.photons() == two.photons(), "{kind:?}: photons differ");
+        assert!(one.photons().eq(two.photons()), "{kind:?}: photons differ");
         let (other, _) = in_pool(2, || {
             trace_map(&world, kind, target, 10, &ProgressBar::hidden())
         });
-        assert!(one.photons() != other.photons(), "{kind:?}: seed ignored");
+        assert!(one.photons().ne(other.photons()), "{kind:?}: seed ignored");
     }
 }
 
@@ -635,7 +634,7 @@ fn scaling_the_light_power_scales_every_photon() {
         let (a, ca) = trace(&dim, kind, 10_000, 4);
         let (b, cb) = trace(&bright, kind, 10_000, 4);
         assert_eq!(ca, cb, "{kind:?}");
-        for (p, q) in a.photons().iter().zip(b.photons()) {
+        for (p, q) in a.photons().zip(b.photons()) {
             assert_eq!(p.position(), q.position());
             assert_eq!(p.direction(), q.direction());
             assert_eq!(p.normal(), q.normal());

@@ -103,7 +103,7 @@ impl RadianceEstimate for KnnEstimate {
         }
         let mut sum = DVec3::ZERO;
         for n in found.as_slice() {
-            let photon = map.photon(n.slot);
+            let photon = &map.photon(n.slot);
             if normals_agree(photon, query.normal) {
                 sum += self.kernel.weight(n.dist2 as f64 / radius2) * power_f64(photon);
             }
@@ -153,7 +153,7 @@ impl RadianceEstimate for FixedRadiusEstimate {
         let mut sum = DVec3::ZERO;
         map.tree()
             .for_each_within(query.position, radius2 as f32, |slot, dist2| {
-                let photon = map.photon(slot);
+                let photon = &map.photon(slot);
                 if normals_agree(photon, query.normal) {
                     sum += self.kernel.weight(dist2 as f64 / radius2) * power_f64(photon);
                 }

@@ -128,6 +128,34 @@ impl KdTree {
     pub fn source_index(&self, slot: usize) -> u32 {
         self.source[slot]
     }
+    /// Inner nodes and leaves are numbered as in a binary heap: the root is 1, the children of
+    /// `i` are `2i` and `2i + 1`, and nodes from `leaf_base()` on are leaves. For walks that
+    /// keep their own data per node (see [`KdTree::node_slots`]).
+    pub fn leaf_base(&self) -> usize {
+        1 << self.depth
+    }
+    /// One past the largest node number.
+    pub fn node_end(&self) -> usize {
+        2 << self.depth
+    }
+    /// The slots under `node` (inner node or leaf): always one contiguous run.
+    pub fn node_slots(&self, node: usize) -> std::ops::Range<usize> {
+        debug_assert!(node >= 1 && node < self.node_end());
+        let level = usize::BITS - 1 - node.leading_zeros();
+        let below = self.depth - level;
+        let first_leaf = ((node << below) - self.leaf_base()) as u64;
+        let end_leaf = (((node + 1) << below) - self.leaf_base()) as u64;
+        let n = self.len() as u64;
+        ((first_leaf * n) >> self.depth) as usize..((end_leaf * n) >> self.depth) as usize
+    }
+    /// Heap bytes held: positions, source indices and split planes.
+    pub fn heap_bytes(&self) -> usize {
+        (self.xs.capacity() + self.ys.capacity() + self.zs.capacity() + self.splits.capacity())
+            * size_of::<f32>()
+            + self.source.capacity() * size_of::<u32>()
+            + self.axes.capacity()
+    }
+    #[inline]
     pub fn point(&self, slot: usize) -> Vec3 {
         Vec3::new(self.xs[slot], self.ys[slot], self.zs[slot])
     }

@@ -1,6 +1,7 @@
 //! The stored photon: 20 bytes (position 12, power 4 as shared-exponent RGB, incoming
 //! direction 2 and surface normal 2 as 8-bit octahedral pairs). Owns the packing and nothing
-//! else; it knows neither the kd-tree nor any estimate.
+//! else; it knows neither the kd-tree nor any estimate. A photon map keeps the position in its
+//! kd-tree only and the other 8 bytes as [`PhotonAttributes`], so no byte is stored twice.
 
 use glam::Vec3;
 
@@ -43,6 +44,25 @@ impl Photon {
         decode_octahedral(self.normal)
     }
 
+    /// Everything but the position: what a photon map stores beside its kd-tree.
+    pub fn attributes(&self) -> PhotonAttributes {
+        PhotonAttributes {
+            power: self.power,
+            direction: self.direction,
+            normal: self.normal,
+        }
+    }
+
+    /// The photon at `position` with `attributes`, bit for bit as it was split.
+    pub fn from_parts(position: Vec3, attributes: PhotonAttributes) -> Self {
+        Self {
+            position: position.to_array().map(f32::to_bits),
+            power: attributes.power,
+            direction: attributes.direction,
+            normal: attributes.normal,
+        }
+    }
+
     /// The 20 stored bytes, field by field, little-endian (for photon map files).
     pub fn to_le_bytes(&self) -> [u8; 20] {
         let mut b = [0u8; 20];
@@ -64,6 +84,31 @@ impl Photon {
             direction: [b[16], b[17]],
             normal: [b[18], b[19]],
         }
+    }
+}
+
+/// A photon without its position: 8 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct PhotonAttributes {
+    power: [u8; 4],
+    direction: [u8; 2],
+    normal: [u8; 2],
+}
+
+impl PhotonAttributes {
+    /// Power (flux) in watts per colour channel.
+    #[inline]
+    pub fn power(&self) -> Vec3 {
+        decode_rgbe(self.power)
+    }
+    #[inline]
+    pub fn direction(&self) -> Vec3 {
+        decode_octahedral(self.direction)
+    }
+    #[inline]
+    pub fn normal(&self) -> Vec3 {
+        decode_octahedral(self.normal)
     }
 }
 
@@ -132,8 +177,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn record_is_twenty_bytes() {
+    fn record_is_twenty_bytes_and_attributes_eight() {
         assert_eq!(std::mem::size_of::<Photon>(), 20);
+        assert_eq!(std::mem::size_of::<PhotonAttributes>(), 8);
+        let p = Photon::new(
+            Vec3::new(1.0, -2.0, 3.5),
+            Vec3::new(0.5, 2.0, 7.0),
+            Vec3::X,
+            -Vec3::Y,
+        );
+        assert_eq!(Photon::from_parts(p.position(), p.attributes()), p);
+        assert_eq!(p.attributes().power(), p.power());
+        assert_eq!(p.attributes().normal(), p.normal());
     }
 
     #[test]

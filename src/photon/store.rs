@@ -286,8 +286,8 @@ impl<W: Write> Hashing<'_, W> {
 /// The map's photons in the order they were given to [`PhotonMap::build`].
 fn build_order(map: &PhotonMap) -> Vec<Photon> {
     let mut photons = vec![Photon::default(); map.len()];
-    for (slot, photon) in map.photons().iter().enumerate() {
-        photons[map.tree().source_index(slot) as usize] = *photon;
+    for (slot, photon) in map.photons().enumerate() {
+        photons[map.tree().source_index(slot) as usize] = photon;
     }
     photons
 }

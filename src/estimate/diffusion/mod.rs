@@ -192,13 +192,13 @@ impl DiffusionEstimate {
         let mut isotropic = 0.0;
         let mut second_moment = 0.0;
         for n in scratch.neighbours.as_slice() {
-            let photon = map.photon(n.slot);
+            let photon = &map.photon(n.slot);
             if !normals_agree(photon, normal) {
                 continue;
             }
             let d2 = n.dist2 as f64;
             if d2 < rho2 {
-                structure.add(gradients[n.slot as usize], 1.0 - d2 / rho2);
+                structure.add(gradients.get(n.slot), 1.0 - d2 / rho2);
             }
             let w = RadialKernel::Epanechnikov.weight(d2 / r2);
             let phi = scalar_power(photon);
@@ -283,7 +283,7 @@ impl RadianceEstimate for DiffusionEstimate {
             if n.dist2 as f64 >= r2 {
                 continue;
             }
-            let photon = map.photon(n.slot);
+            let photon = &map.photon(n.slot);
             if normals_agree(photon, normal) {
                 let d = (photon.position() - x).as_dvec3();
                 sum += kernel.weight(tensor.scaled_mahalanobis(d, r2)) * power_f64(photon);
