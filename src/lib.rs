@@ -16,4 +16,5 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod timing;
+pub mod tradeoff;
 pub mod world;

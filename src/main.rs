@@ -5,6 +5,8 @@
 use clap::{Parser, Subcommand};
 use dpm::density::DensityArgs;
 use dpm::render::pipeline::{self, RenderArgs};
+use dpm::tradeoff::TradeoffArgs;
+use dpm::tradeoff::reference::ReferenceArgs;
 use std::process::ExitCode;
 
 /// Diffusion based photon mapping (Schjøth, Olsen, Sparring) on Embree 3.
@@ -27,6 +29,14 @@ enum Command {
     /// file, or from a built-in distribution whose exact density is known, in which case the
     /// error against it is reported (the paper's Figures 4-6).
     Density(DensityArgs),
+    /// Sweep photon counts and each estimate's parameters (cone: k; Epanechnikov: radius;
+    /// diffusion: radius and K) on the constructed distribution or a scene, time every run
+    /// and measure its error; writes a CSV and an error-against-time plot (SVG) and prints
+    /// each estimate's Pareto front.
+    Tradeoff(TradeoffArgs),
+    /// Render a scene's reference caustic image (many more photons, a smaller radius) to a
+    /// cache file, or report the cached one when the scene and settings are unchanged.
+    Reference(ReferenceArgs),
 }
 
 fn main() -> ExitCode {
@@ -61,6 +71,33 @@ fn main() -> ExitCode {
                 eprintln!("error: {e}");
                 // Every density error is about its input: the photons, flags or output path.
                 ExitCode::from(2)
+            }
+        },
+        Command::Tradeoff(args) => match dpm::tradeoff::run(&args) {
+            Ok(outcome) => {
+                print!("{}", outcome.table);
+                eprintln!(
+                    "{} runs in {:.1} s; wrote {} and {}",
+                    outcome.rows.len(),
+                    outcome.seconds,
+                    outcome.csv.display(),
+                    outcome.svg.display()
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(e.exit_code())
+            }
+        },
+        Command::Reference(args) => match dpm::tradeoff::reference::run(&args) {
+            Ok(line) => {
+                println!("{line}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(e.exit_code())
             }
         },
     }
