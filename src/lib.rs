@@ -13,6 +13,7 @@ pub mod interrupt;
 pub mod optics;
 pub mod photon;
 pub mod render;
+pub mod resident_memory;
 pub mod sampling;
 pub mod scene;
 pub mod timing;

@@ -54,6 +54,17 @@ fn main() -> ExitCode {
                     eprintln!("caustic estimate: {e}");
                 }
                 eprint!("{}", outcome.times.table());
+                let memory = [
+                    outcome
+                        .caustic_bytes_per_photon
+                        .map(|b| format!("caustic map {b:.1} bytes/photon")),
+                    dpm::resident_memory::peak_resident_bytes()
+                        .map(|b| format!("peak resident {:.0} MiB", b as f64 / (1 << 20) as f64)),
+                ];
+                let memory: Vec<String> = memory.into_iter().flatten().collect();
+                if !memory.is_empty() {
+                    eprintln!("memory: {}", memory.join(", "));
+                }
                 eprintln!("wrote {}", outcome.output.display());
                 ExitCode::SUCCESS
             }

@@ -152,6 +152,8 @@ pub struct RenderOutcome {
     pub output: PathBuf,
     pub times: PhaseTimes,
     pub caustic: Option<TraceCounts>,
+    /// Heap bytes per stored photon of the caustic map, its gradients included when made.
+    pub caustic_bytes_per_photon: Option<f64>,
     pub global: Option<TraceCounts>,
     pub estimator: Option<String>,
 }
@@ -332,10 +334,11 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
             "scene": args.scene,
             "output": output,
             "estimator": estimator,
-            "caustic": caustic_map.as_ref().map(|(_, c)| serde_json::json!({"emitted": c.emitted, "stored": c.stored})),
+            "caustic": caustic_map.as_ref().map(|(m, c)| serde_json::json!({"emitted": c.emitted, "stored": c.stored, "bytes_per_photon": m.bytes_per_photon()})),
             "global": global.as_ref().map(|(_, c)| serde_json::json!({"emitted": c.emitted, "stored": c.stored})),
             "phases": times.phases,
             "total_seconds": times.total_seconds(),
+            "peak_resident_bytes": crate::resident_memory::peak_resident_bytes(),
         });
         let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
         image_io::write_atomically(path, |w| {
@@ -347,6 +350,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         output,
         times,
         caustic: caustic_map.as_ref().map(|(_, c)| *c),
+        caustic_bytes_per_photon: caustic_map.as_ref().map(|(m, _)| m.bytes_per_photon()),
         global: global.as_ref().map(|(_, c)| *c),
         estimator,
     })
