@@ -1,0 +1,245 @@
+//! Photon tracing against Embree alone, on the shipped scenes: the caustic map of
+//! `scenes/torus-knot.toml`, and the caustic and global maps of `scenes/cornell-box.toml`.
+//!
+//! The tracer side times [`trace_photons`] (every path until the target is stored, and the
+//! photon records; not the kd-tree). Two Embree sides time closest-hit queries only:
+//! - "embree emission": the first rays of the same paths (the same lights, the same aim at the
+//!   specular objects, the same random numbers), as many rays as the tracer casts;
+//! - "embree replay": exactly the rays the tracer casts, bounces included, replayed in order.
+//!
+//! The ratio of the tracer's rays per second to Embree's shows what everything that is not
+//! Embree costs. Against emission rays it also carries the difference between first rays and
+//! bounce rays (rays leaving a surface, inside glass); against the replay it does not.
+//! All run on 1 and 2 threads (rayon pools with flush-to-zero, as the renderer uses).
+//!
+//! `cargo bench --bench trace`. Criterion prints each figure; a table of the medians, the
+//! ratios and the 2-thread speedups follows at the end. On a shared machine compare ratios
+//! from one run, not absolute times across runs.
+
+use criterion::{BenchmarkId, Criterion, Throughput};
+use dpm::photon::tracer::{MapKind, TracedPhotons, emission_rays, path_rays, trace_photons};
+use dpm::world::World;
+use glam::Vec3;
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::hint::black_box;
+use std::path::Path;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+const SEED: u64 = 7;
+const THREADS: [usize; 2] = [1, 2];
+/// Rays per rayon task on the Embree side: big enough that scheduling is noise.
+const RAY_CHUNK: usize = 4096;
+
+struct Case {
+    name: &'static str,
+    scene: &'static str,
+    kind: MapKind,
+    target: usize,
+}
+
+const CASES: [Case; 3] = [
+    Case {
+        name: "torus-knot caustic",
+        scene: "scenes/torus-knot.toml",
+        kind: MapKind::Caustic,
+        target: 100_000,
+    },
+    Case {
+        name: "cornell-box caustic",
+        scene: "scenes/cornell-box.toml",
+        kind: MapKind::Caustic,
+        target: 100_000,
+    },
+    Case {
+        name: "cornell-box global",
+        scene: "scenes/cornell-box.toml",
+        kind: MapKind::Global { with_direct: true },
+        target: 200_000,
+    },
+];
+
+/// Which side of the comparison a timing belongs to.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Side {
+    Tracer,
+    Emission,
+    Replay,
+}
+
+/// Seconds per run of every timed closure, by (case, side, threads): criterion reports its
+/// own estimates, this keeps the raw samples for the closing table.
+type Samples = BTreeMap<(usize, Side, usize), Vec<f64>>;
+static SAMPLES: Mutex<Samples> = Mutex::new(BTreeMap::new());
+
+fn record(key: (usize, Side, usize), elapsed: Duration, iters: u64) {
+    let per_run = elapsed.as_secs_f64() / iters.max(1) as f64;
+    let mut samples = SAMPLES.lock().unwrap_or_else(|p| p.into_inner());
+    samples.entry(key).or_default().push(per_run);
+}
+
+fn world(scene: &str) -> World {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+    let description = dpm::scene::load(&path).expect("shipped scene loads");
+    World::new(description).expect("Embree builds the scene")
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    dpm::embree::thread_pool(threads).expect("rayon pool")
+}
+
+fn trace(world: &World, case: &Case) -> TracedPhotons {
+    trace_photons(world, case.kind, case.target, SEED, &ProgressBar::hidden())
+}
+
+/// Closest hits of `rays`, in parallel chunks; returns how many hit (so nothing is optimised
+/// away).
+fn embree_hits(world: &World, rays: &[(Vec3, Vec3)]) -> usize {
+    rays.par_chunks(RAY_CHUNK)
+        .map(|chunk| {
+            chunk
+                .iter()
+                .filter(|(o, d)| world.closest_hit_distance(*o, *d).is_some())
+                .count()
+        })
+        .sum()
+}
+
+/// Facts about one case measured once, untimed: what the tracer stores and casts.
+struct Shape {
+    stored: u64,
+    rays: u64,
+    /// Emission rays: the first rays of as many paths as the tracer casts rays (fewer only
+    /// when a path carries no flux and casts nothing).
+    emission_rays: u64,
+    /// Replayed rays: those of the paths the map keeps (not those traced past the target).
+    replay_rays: u64,
+}
+
+fn bench_case(c: &mut Criterion, index: usize, case: &Case, shapes: &mut Vec<Shape>) {
+    let world = world(case.scene);
+    let first = pool(1).install(|| trace(&world, case));
+    assert_eq!(first.photons.len(), case.target, "{}", case.name);
+    let emission = emission_rays(&world, case.kind, SEED, 0..first.rays);
+    assert!(!emission.is_empty(), "{}: no emission rays", case.name);
+    let replay = path_rays(&world, case.kind, SEED, 0..first.counts.emitted);
+    shapes.push(Shape {
+        stored: first.photons.len() as u64,
+        rays: first.rays,
+        emission_rays: emission.len() as u64,
+        replay_rays: replay.len() as u64,
+    });
+    drop(first);
+
+    let mut group = c.benchmark_group(case.name);
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4));
+    for threads in THREADS {
+        let pool = pool(threads);
+        group.throughput(Throughput::Elements(case.target as u64));
+        group.bench_function(BenchmarkId::new("tracer photons", threads), |b| {
+            b.iter_custom(|iters| {
+                let start = Instant::now();
+                for _ in 0..iters {
+                    black_box(pool.install(|| trace(&world, case)));
+                }
+                let elapsed = start.elapsed();
+                record((index, Side::Tracer, threads), elapsed, iters);
+                elapsed
+            })
+        });
+        for (side, name, rays) in [
+            (Side::Emission, "embree emission rays", &emission),
+            (Side::Replay, "embree replay rays", &replay),
+        ] {
+            group.throughput(Throughput::Elements(rays.len() as u64));
+            group.bench_function(BenchmarkId::new(name, threads), |b| {
+                b.iter_custom(|iters| {
+                    let start = Instant::now();
+                    for _ in 0..iters {
+                        black_box(pool.install(|| embree_hits(&world, rays)));
+                    }
+                    let elapsed = start.elapsed();
+                    record((index, side, threads), elapsed, iters);
+                    elapsed
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+fn median(samples: &[f64]) -> f64 {
+    let mut v = samples.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn print_table(shapes: &[Shape]) {
+    let samples = SAMPLES.lock().unwrap_or_else(|p| p.into_inner());
+    let seconds = |case, side, threads| {
+        samples
+            .get(&(case, side, threads))
+            .map_or(f64::NAN, |s| median(s))
+    };
+    eprintln!();
+    eprintln!("trace bench: medians, in millions per second; ratio = tracer rays/s / Embree rays/s");
+    eprintln!(
+        "{:<20} {:>3} {:>9} {:>9} {:>9} {:>6} {:>9} {:>6}",
+        "case", "thr", "photons", "tracer", "emission", "ratio", "replay", "ratio"
+    );
+    for (i, case) in CASES.iter().enumerate() {
+        let shape = &shapes[i];
+        let rate = |side, threads, rays: u64| rays as f64 / seconds(i, side, threads);
+        for threads in THREADS {
+            let tracer = rate(Side::Tracer, threads, shape.rays);
+            let emission = rate(Side::Emission, threads, shape.emission_rays);
+            let replay = rate(Side::Replay, threads, shape.replay_rays);
+            eprintln!(
+                "{:<20} {:>3} {:>9.3} {:>9.3} {:>9.3} {:>6.2} {:>9.3} {:>6.2}",
+                case.name,
+                threads,
+                rate(Side::Tracer, threads, shape.stored) / 1e6,
+                tracer / 1e6,
+                emission / 1e6,
+                tracer / emission,
+                replay / 1e6,
+                tracer / replay,
+            );
+        }
+        let speedup = |side| seconds(i, side, 1) / seconds(i, side, 2);
+        eprintln!(
+            "{:<20}     2-thread speedup: tracer {:.2}, emission {:.2}, replay {:.2}; \
+             rays per stored photon {:.2}",
+            "",
+            speedup(Side::Tracer),
+            speedup(Side::Emission),
+            speedup(Side::Replay),
+            shape.rays as f64 / shape.stored as f64
+        );
+    }
+}
+
+fn main() {
+    let mut criterion = Criterion::default().configure_from_args();
+    let mut shapes = Vec::new();
+    for (i, case) in CASES.iter().enumerate() {
+        bench_case(&mut criterion, i, case, &mut shapes);
+    }
+    criterion.final_summary();
+    if shapes.len() == CASES.len() {
+        print_table(&shapes);
+    }
+}
