@@ -195,7 +195,9 @@ fn print_table(shapes: &[Shape]) {
             .map_or(f64::NAN, |s| median(s))
     };
     eprintln!();
-    eprintln!("trace bench: medians, in millions per second; ratio = tracer rays/s / Embree rays/s");
+    eprintln!(
+        "trace bench: medians, in millions per second; ratio = tracer rays/s / Embree rays/s"
+    );
     eprintln!(
         "{:<20} {:>3} {:>9} {:>9} {:>9} {:>6} {:>9} {:>6}",
         "case", "thr", "photons", "tracer", "emission", "ratio", "replay", "ratio"
