@@ -12,9 +12,10 @@
 //! bounce rays (rays leaving a surface, inside glass); against the replay it does not.
 //! All run on 1 and 2 threads (rayon pools with flush-to-zero, as the renderer uses).
 //!
-//! `cargo bench --bench trace`. Criterion prints each figure; a table of the medians, the
-//! ratios and the 2-thread speedups follows at the end. On a shared machine compare ratios
-//! from one run, not absolute times across runs.
+//! `cargo bench --bench trace`. Criterion prints each figure; then each case runs a few rounds
+//! that time every side back to back, and a table of their medians, the ratios and the
+//! 2-thread speedups follows at the end. On a shared machine compare those ratios, not
+//! absolute times across runs.
 
 use criterion::{BenchmarkId, Criterion, Throughput};
 use dpm::photon::tracer::{MapKind, TracedPhotons, emission_rays, path_rays, trace_photons};
@@ -22,10 +23,8 @@ use dpm::world::World;
 use glam::Vec3;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 use std::hint::black_box;
 use std::path::Path;
-use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 const SEED: u64 = 7;
@@ -62,23 +61,16 @@ const CASES: [Case; 3] = [
 ];
 
 /// Which side of the comparison a timing belongs to.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy)]
 enum Side {
-    Tracer,
-    Emission,
-    Replay,
+    Tracer = 0,
+    Emission = 1,
+    Replay = 2,
 }
 
-/// Seconds per run of every timed closure, by (case, side, threads): criterion reports its
-/// own estimates, this keeps the raw samples for the closing table.
-type Samples = BTreeMap<(usize, Side, usize), Vec<f64>>;
-static SAMPLES: Mutex<Samples> = Mutex::new(BTreeMap::new());
-
-fn record(key: (usize, Side, usize), elapsed: Duration, iters: u64) {
-    let per_run = elapsed.as_secs_f64() / iters.max(1) as f64;
-    let mut samples = SAMPLES.lock().unwrap_or_else(|p| p.into_inner());
-    samples.entry(key).or_default().push(per_run);
-}
+/// Rounds of the closing table: each round times every side on 1 and 2 threads back to back,
+/// so that a change in the machine's load falls on all of them alike.
+const ROUNDS: usize = 9;
 
 fn world(scene: &str) -> World {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
@@ -107,8 +99,11 @@ fn embree_hits(world: &World, rays: &[(Vec3, Vec3)]) -> usize {
         .sum()
 }
 
-/// Facts about one case measured once, untimed: what the tracer stores and casts.
+/// One case: what the tracer stores and casts (measured once, untimed), and the seconds of
+/// each interleaved round by side and thread count.
 struct Shape {
+    /// `seconds[side][threads index][round]`.
+    seconds: [[Vec<f64>; 2]; 3],
     stored: u64,
     rays: u64,
     /// Emission rays: the first rays of as many paths as the tracer casts rays (fewer only
@@ -118,26 +113,27 @@ struct Shape {
     replay_rays: u64,
 }
 
-fn bench_case(c: &mut Criterion, index: usize, case: &Case, shapes: &mut Vec<Shape>) {
+fn bench_case(c: &mut Criterion, case: &Case, shapes: &mut Vec<Shape>) {
     let world = world(case.scene);
     let first = pool(1).install(|| trace(&world, case));
     assert_eq!(first.photons.len(), case.target, "{}", case.name);
     let emission = emission_rays(&world, case.kind, SEED, 0..first.rays);
     assert!(!emission.is_empty(), "{}: no emission rays", case.name);
     let replay = path_rays(&world, case.kind, SEED, 0..first.counts.emitted);
-    shapes.push(Shape {
+    let mut shape = Shape {
+        seconds: Default::default(),
         stored: first.photons.len() as u64,
         rays: first.rays,
         emission_rays: emission.len() as u64,
         replay_rays: replay.len() as u64,
-    });
+    };
     drop(first);
 
     let mut group = c.benchmark_group(case.name);
     group
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
-        .measurement_time(Duration::from_secs(4));
+        .measurement_time(Duration::from_secs(3));
     for threads in THREADS {
         let pool = pool(threads);
         group.throughput(Throughput::Elements(case.target as u64));
@@ -147,14 +143,12 @@ fn bench_case(c: &mut Criterion, index: usize, case: &Case, shapes: &mut Vec<Sha
                 for _ in 0..iters {
                     black_box(pool.install(|| trace(&world, case)));
                 }
-                let elapsed = start.elapsed();
-                record((index, Side::Tracer, threads), elapsed, iters);
-                elapsed
+                start.elapsed()
             })
         });
-        for (side, name, rays) in [
-            (Side::Emission, "embree emission rays", &emission),
-            (Side::Replay, "embree replay rays", &replay),
+        for (name, rays) in [
+            ("embree emission rays", &emission),
+            ("embree replay rays", &replay),
         ] {
             group.throughput(Throughput::Elements(rays.len() as u64));
             group.bench_function(BenchmarkId::new(name, threads), |b| {
@@ -163,14 +157,36 @@ fn bench_case(c: &mut Criterion, index: usize, case: &Case, shapes: &mut Vec<Sha
                     for _ in 0..iters {
                         black_box(pool.install(|| embree_hits(&world, rays)));
                     }
-                    let elapsed = start.elapsed();
-                    record((index, side, threads), elapsed, iters);
-                    elapsed
+                    start.elapsed()
                 })
             });
         }
     }
     group.finish();
+
+    let pools = THREADS.map(pool);
+    for _ in 0..ROUNDS {
+        for (t, pool) in pools.iter().enumerate() {
+            let tracer = seconds_of(|| pool.install(|| trace(&world, case)));
+            let emitted = seconds_of(|| pool.install(|| embree_hits(&world, &emission)));
+            let replayed = seconds_of(|| pool.install(|| embree_hits(&world, &replay)));
+            for (side, seconds) in [
+                (Side::Tracer, tracer),
+                (Side::Emission, emitted),
+                (Side::Replay, replayed),
+            ] {
+                shape.seconds[side as usize][t].push(seconds);
+            }
+        }
+    }
+    shapes.push(shape);
+}
+
+/// Wall-clock seconds of one call.
+fn seconds_of<R>(f: impl FnOnce() -> R) -> f64 {
+    let start = Instant::now();
+    black_box(f());
+    start.elapsed().as_secs_f64()
 }
 
 fn median(samples: &[f64]) -> f64 {
@@ -188,47 +204,51 @@ fn median(samples: &[f64]) -> f64 {
 }
 
 fn print_table(shapes: &[Shape]) {
-    let samples = SAMPLES.lock().unwrap_or_else(|p| p.into_inner());
-    let seconds = |case, side, threads| {
-        samples
-            .get(&(case, side, threads))
-            .map_or(f64::NAN, |s| median(s))
-    };
     eprintln!();
     eprintln!(
-        "trace bench: medians, in millions per second; ratio = tracer rays/s / Embree rays/s"
+        "trace bench: medians of {ROUNDS} interleaved rounds, in millions per second; \
+         ratio = tracer rays/s / Embree rays/s (median of the per-round ratios)"
     );
     eprintln!(
         "{:<20} {:>3} {:>9} {:>9} {:>9} {:>6} {:>9} {:>6}",
         "case", "thr", "photons", "tracer", "emission", "ratio", "replay", "ratio"
     );
-    for (i, case) in CASES.iter().enumerate() {
-        let shape = &shapes[i];
-        let rate = |side, threads, rays: u64| rays as f64 / seconds(i, side, threads);
-        for threads in THREADS {
-            let tracer = rate(Side::Tracer, threads, shape.rays);
-            let emission = rate(Side::Emission, threads, shape.emission_rays);
-            let replay = rate(Side::Replay, threads, shape.replay_rays);
+    for (case, shape) in CASES.iter().zip(shapes) {
+        let seconds = |side: Side, t: usize| &shape.seconds[side as usize][t];
+        // Per round: `count / seconds` of one side over the same of another.
+        let ratio = |(a, na): (Side, u64), (b, nb): (Side, u64), (ta, tb): (usize, usize)| {
+            let per_round: Vec<f64> = seconds(a, ta)
+                .iter()
+                .zip(seconds(b, tb))
+                .map(|(sa, sb)| (na as f64 / sa) / (nb as f64 / sb))
+                .collect();
+            median(&per_round)
+        };
+        let tracer = (Side::Tracer, shape.rays);
+        let emission = (Side::Emission, shape.emission_rays);
+        let replay = (Side::Replay, shape.replay_rays);
+        for (t, threads) in THREADS.iter().enumerate() {
+            let rate = |(side, n): (Side, u64)| n as f64 / median(seconds(side, t)) / 1e6;
             eprintln!(
                 "{:<20} {:>3} {:>9.3} {:>9.3} {:>9.3} {:>6.2} {:>9.3} {:>6.2}",
                 case.name,
                 threads,
-                rate(Side::Tracer, threads, shape.stored) / 1e6,
-                tracer / 1e6,
-                emission / 1e6,
-                tracer / emission,
-                replay / 1e6,
-                tracer / replay,
+                rate((Side::Tracer, shape.stored)),
+                rate(tracer),
+                rate(emission),
+                ratio(tracer, emission, (t, t)),
+                rate(replay),
+                ratio(tracer, replay, (t, t)),
             );
         }
-        let speedup = |side| seconds(i, side, 1) / seconds(i, side, 2);
+        let speedup = |side| ratio(side, side, (1, 0));
         eprintln!(
             "{:<20}     2-thread speedup: tracer {:.2}, emission {:.2}, replay {:.2}; \
              rays per stored photon {:.2}",
             "",
-            speedup(Side::Tracer),
-            speedup(Side::Emission),
-            speedup(Side::Replay),
+            speedup(tracer),
+            speedup(emission),
+            speedup(replay),
             shape.rays as f64 / shape.stored as f64
         );
     }
@@ -237,8 +257,8 @@ fn print_table(shapes: &[Shape]) {
 fn main() {
     let mut criterion = Criterion::default().configure_from_args();
     let mut shapes = Vec::new();
-    for (i, case) in CASES.iter().enumerate() {
-        bench_case(&mut criterion, i, case, &mut shapes);
+    for case in &CASES {
+        bench_case(&mut criterion, case, &mut shapes);
     }
     criterion.final_summary();
     if shapes.len() == CASES.len() {
