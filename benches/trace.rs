@@ -101,7 +101,7 @@ fn embree_hits(world: &World, rays: &[(Vec3, Vec3)]) -> usize {
 
 /// One case: what the tracer stores and casts (measured once, untimed), and the seconds of
 /// each interleaved round by side and thread count.
-struct Shape {
+struct CaseFigures {
     /// `seconds[side][threads index][round]`.
     seconds: [[Vec<f64>; 2]; 3],
     stored: u64,
@@ -113,14 +113,14 @@ struct Shape {
     replay_rays: u64,
 }
 
-fn bench_case(c: &mut Criterion, case: &Case, shapes: &mut Vec<Shape>) {
+fn bench_case(c: &mut Criterion, case: &Case, all_figures: &mut Vec<CaseFigures>) {
     let world = world(case.scene);
     let first = pool(1).install(|| trace(&world, case));
     assert_eq!(first.photons.len(), case.target, "{}", case.name);
     let emission = emission_rays(&world, case.kind, SEED, 0..first.rays);
     assert!(!emission.is_empty(), "{}: no emission rays", case.name);
     let replay = path_rays(&world, case.kind, SEED, 0..first.counts.emitted);
-    let mut shape = Shape {
+    let mut figures = CaseFigures {
         seconds: Default::default(),
         stored: first.photons.len() as u64,
         rays: first.rays,
@@ -175,11 +175,11 @@ fn bench_case(c: &mut Criterion, case: &Case, shapes: &mut Vec<Shape>) {
                 (Side::Emission, emitted),
                 (Side::Replay, replayed),
             ] {
-                shape.seconds[side as usize][t].push(seconds);
+                figures.seconds[side as usize][t].push(seconds);
             }
         }
     }
-    shapes.push(shape);
+    all_figures.push(figures);
 }
 
 /// Wall-clock seconds of one call.
@@ -203,7 +203,7 @@ fn median(samples: &[f64]) -> f64 {
     }
 }
 
-fn print_table(shapes: &[Shape]) {
+fn print_table(all_figures: &[CaseFigures]) {
     eprintln!();
     eprintln!(
         "trace bench: medians of {ROUNDS} interleaved rounds, in millions per second; \
@@ -213,8 +213,8 @@ fn print_table(shapes: &[Shape]) {
         "{:<20} {:>3} {:>9} {:>9} {:>9} {:>6} {:>9} {:>6}",
         "case", "thr", "photons", "tracer", "emission", "ratio", "replay", "ratio"
     );
-    for (case, shape) in CASES.iter().zip(shapes) {
-        let seconds = |side: Side, t: usize| &shape.seconds[side as usize][t];
+    for (case, figures) in CASES.iter().zip(all_figures) {
+        let seconds = |side: Side, t: usize| &figures.seconds[side as usize][t];
         // Per round: `count / seconds` of one side over the same of another.
         let ratio = |(a, na): (Side, u64), (b, nb): (Side, u64), (ta, tb): (usize, usize)| {
             let per_round: Vec<f64> = seconds(a, ta)
@@ -224,16 +224,16 @@ fn print_table(shapes: &[Shape]) {
                 .collect();
             median(&per_round)
         };
-        let tracer = (Side::Tracer, shape.rays);
-        let emission = (Side::Emission, shape.emission_rays);
-        let replay = (Side::Replay, shape.replay_rays);
+        let tracer = (Side::Tracer, figures.rays);
+        let emission = (Side::Emission, figures.emission_rays);
+        let replay = (Side::Replay, figures.replay_rays);
         for (t, threads) in THREADS.iter().enumerate() {
             let rate = |(side, n): (Side, u64)| n as f64 / median(seconds(side, t)) / 1e6;
             eprintln!(
                 "{:<20} {:>3} {:>9.3} {:>9.3} {:>9.3} {:>6.2} {:>9.3} {:>6.2}",
                 case.name,
                 threads,
-                rate((Side::Tracer, shape.stored)),
+                rate((Side::Tracer, figures.stored)),
                 rate(tracer),
                 rate(emission),
                 ratio(tracer, emission, (t, t)),
@@ -249,19 +249,19 @@ fn print_table(shapes: &[Shape]) {
             speedup(tracer),
             speedup(emission),
             speedup(replay),
-            shape.rays as f64 / shape.stored as f64
+            figures.rays as f64 / figures.stored as f64
         );
     }
 }
 
 fn main() {
     let mut criterion = Criterion::default().configure_from_args();
-    let mut shapes = Vec::new();
+    let mut all_figures = Vec::new();
     for case in &CASES {
-        bench_case(&mut criterion, case, &mut shapes);
+        bench_case(&mut criterion, case, &mut all_figures);
     }
     criterion.final_summary();
-    if shapes.len() == CASES.len() {
-        print_table(&shapes);
+    if all_figures.len() == CASES.len() {
+        print_table(&all_figures);
     }
 }
