@@ -28,10 +28,33 @@ pub enum Stream {
     Distribution = 4,
 }
 
+/// The generators of one stream under one seed, with the per-stream hashing done once: photon
+/// tracing seeds a generator per path, millions of times.
+#[derive(Clone, Copy, Debug)]
+pub struct StreamSeed {
+    hashed: u64,
+}
+
+impl StreamSeed {
+    pub fn new(seed: u64, stream: Stream) -> Self {
+        Self {
+            hashed: splitmix64(seed ^ splitmix64(stream as u64)),
+        }
+    }
+
+    /// The same generator as `Rng::for_index(seed, stream, index)`.
+    pub fn rng(&self, index: u64) -> Rng {
+        Rng::from_hashed(self.hashed, index)
+    }
+}
+
 impl Rng {
     /// The generator for item `index` of `stream` under `seed`.
     pub fn for_index(seed: u64, stream: Stream, index: u64) -> Self {
-        let a = splitmix64(seed ^ splitmix64(stream as u64));
+        StreamSeed::new(seed, stream).rng(index)
+    }
+
+    fn from_hashed(a: u64, index: u64) -> Self {
         let b = splitmix64(a ^ index.wrapping_mul(0xD6E8_FEB8_6659_FD93));
         let mut rng = Self {
             state: 0,
@@ -123,6 +146,8 @@ mod tests {
         assert_ne!(a[0], c);
         assert_ne!(a[0], a[1]);
         assert_ne!(Rng::for_index(8, Stream::Pixels, 0).next_u32(), a[0]);
+        let seeded = StreamSeed::new(7, Stream::Pixels);
+        assert_eq!(seeded.rng(3).next_u32(), a[3]);
     }
 
     #[test]

@@ -9,7 +9,7 @@
 
 use super::{Photon, PhotonMap};
 use crate::optics::{fresnel_dielectric, reflect, refract};
-use crate::sampling::{Rng, Stream, cosine_hemisphere};
+use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
 use crate::scene::Material;
 use crate::world::lights::{self, Emission};
 use crate::world::{Surface, World};
@@ -44,6 +44,8 @@ struct TracedPhoton {
     flux: Vec3,
     direction: Vec3,
     normal: Vec3,
+    /// Index of the path that stored it: where a pass that reaches its target stops counting.
+    path: u64,
 }
 
 /// Splits photon paths among the lights in proportion to their power.
@@ -85,6 +87,77 @@ impl LightChooser {
     }
 }
 
+/// How the paths of one pass start: which light, aimed where, with which random numbers.
+struct Emitter<'w> {
+    world: &'w World,
+    chooser: LightChooser,
+    aim: Option<crate::world::BoundingSphere>,
+    streams: StreamSeed,
+    ray_epsilon: f32,
+}
+
+/// The start of a path that carries flux.
+struct PathStart {
+    rng: Rng,
+    origin: Vec3,
+    direction: Vec3,
+    flux: Vec3,
+}
+
+impl<'w> Emitter<'w> {
+    fn new(world: &'w World, kind: MapKind, seed: u64) -> Option<Self> {
+        let (aim, stream) = match kind {
+            MapKind::Caustic => (world.specular_bounds, Stream::CausticPhotons),
+            MapKind::Global { .. } => (None, Stream::GlobalPhotons),
+        };
+        Some(Self {
+            world,
+            chooser: LightChooser::new(world)?,
+            aim,
+            streams: StreamSeed::new(seed, stream),
+            ray_epsilon: world.ray_epsilon(),
+        })
+    }
+
+    /// Path `index`: its generator (for the rest of the path) and first ray, or `None` when it
+    /// carries no flux and so casts no ray.
+    fn start(&self, index: u64) -> Option<PathStart> {
+        let mut rng = self.streams.rng(index);
+        let l = self.chooser.pick(rng.next_f32());
+        let light = &self.world.description.lights[l];
+        let Emission {
+            origin,
+            direction,
+            flux,
+        } = lights::emit(light, self.aim, &mut rng);
+        let flux = flux / self.chooser.pdf[l];
+        (flux.max_element() > 0.0).then(|| PathStart {
+            rng,
+            // Just off the light: the first ray would otherwise hit the light's own surface.
+            origin: origin + direction * self.ray_epsilon,
+            direction,
+            flux,
+        })
+    }
+}
+
+/// The first ray (origin, unit direction) of each path in `paths`, drawn exactly as
+/// [`trace_photons`] draws it (same lights, same aim, same random numbers), for timing Embree
+/// alone on the same rays. Paths that carry no flux cast no ray and are left out.
+pub fn emission_rays(
+    world: &World,
+    kind: MapKind,
+    seed: u64,
+    paths: std::ops::Range<u64>,
+) -> Vec<(Vec3, Vec3)> {
+    let Some(emitter) = Emitter::new(world, kind, seed) else {
+        return Vec::new();
+    };
+    paths
+        .filter_map(|i| emitter.start(i).map(|s| (s.origin, s.direction)))
+        .collect()
+}
+
 /// Traces paths until `target` photons are stored (or `max_paths` are emitted), and builds the map.
 /// Stops early with an empty map when an interruption is requested ([`crate::interrupt`]);
 /// the caller must check for it and discard the map.
@@ -95,90 +168,241 @@ pub fn trace_map(
     seed: u64,
     progress: &ProgressBar,
 ) -> (PhotonMap, TraceCounts) {
-    let max_paths = (target as u64).saturating_mul(1000).max(1_000_000);
-    let Some(chooser) = LightChooser::new(world) else {
-        return (PhotonMap::build(Vec::new(), 0), TraceCounts::default());
-    };
-    let aim = match kind {
-        MapKind::Caustic => world.specular_bounds,
-        MapKind::Global { .. } => None,
-    };
-    let stream = match kind {
-        MapKind::Caustic => Stream::CausticPhotons,
-        MapKind::Global { .. } => Stream::GlobalPhotons,
-    };
-    let mut traced: Vec<TracedPhoton> = Vec::with_capacity(target);
-    let mut emitted: u64 = 0;
-    let mut batch = 16_384u64;
-    while traced.len() < target && emitted < max_paths && !crate::interrupt::requested() {
-        let start = emitted;
-        let end = (start + batch).min(max_paths);
-        let paths: Vec<Vec<TracedPhoton>> = (start..end)
-            .into_par_iter()
-            .map(|i| {
-                if crate::interrupt::requested() {
-                    return Vec::new();
-                }
-                let mut rng = Rng::for_index(seed, stream, i);
-                trace_path(world, kind, &chooser, aim, &mut rng)
-            })
-            .collect();
-        for (offset, path) in paths.into_iter().enumerate() {
-            if traced.len() >= target {
-                break;
-            }
-            emitted = start + offset as u64 + 1;
-            let room = target - traced.len();
-            traced.extend(path.into_iter().take(room));
-        }
-        progress.set_position(traced.len().min(target) as u64);
-        // Grow batches towards the expected remainder so few batches are needed.
-        let rate = traced.len().max(1) as f64 / emitted.max(1) as f64;
-        let remaining = (target - traced.len().min(target)) as f64 / rate;
-        batch = (remaining * 1.05).clamp(16_384.0, 4_000_000.0) as u64;
-    }
-    if crate::interrupt::requested() {
+    let traced = trace_photons(world, kind, target, seed, progress);
+    if traced.interrupted {
         // Not worth building: the caller discards it.
-        return (PhotonMap::default(), TraceCounts { emitted, stored: 0 });
+        return (PhotonMap::default(), traced.counts);
     }
-    let scale = 1.0 / emitted.max(1) as f32;
-    let photons: Vec<Photon> = traced
-        .par_iter()
-        .map(|p| Photon::new(p.position, p.flux * scale, p.direction, p.normal))
-        .collect();
-    drop(traced);
-    let stored = photons.len() as u64;
-    (
-        PhotonMap::build(photons, emitted),
-        TraceCounts { emitted, stored },
-    )
+    let map = PhotonMap::build(traced.photons, traced.counts.emitted);
+    (map, traced.counts)
 }
 
+/// The photons of one pass, before any kd-tree is built.
+pub struct TracedPhotons {
+    /// In path index order, flux already divided by the number of paths emitted.
+    pub photons: Vec<Photon>,
+    pub counts: TraceCounts,
+    /// Closest-hit rays cast, counting the paths traced past the target too.
+    pub rays: u64,
+    /// An interruption was requested: `photons` is empty and must be discarded.
+    pub interrupted: bool,
+}
+
+/// What one rayon task traced: a run of consecutive paths.
+struct Chunk {
+    photons: Vec<TracedPhoton>,
+    /// One past the last path of the run.
+    end: u64,
+    rays: u64,
+}
+
+/// Paths per rayon task: many tasks per thread so that none waits long at the end of a batch,
+/// each long enough (hundreds of microseconds at least) that scheduling costs nothing.
+fn chunk_len(batch: u64) -> u64 {
+    let threads = rayon::current_num_threads().max(1) as u64;
+    (batch / (threads * 16)).clamp(1024, 16_384)
+}
+
+/// The tracing half of [`trace_map`], kept apart so that it can be timed on its own.
+///
+/// Paths run in batches sized to finish the pass; a batch is split into chunks of consecutive
+/// paths, one rayon task each, whose photons are kept in chunk order: the same photons in the
+/// same order whatever the thread count.
+pub fn trace_photons(
+    world: &World,
+    kind: MapKind,
+    target: usize,
+    seed: u64,
+    progress: &ProgressBar,
+) -> TracedPhotons {
+    let max_paths = (target as u64).saturating_mul(1000).max(1_000_000);
+    let Some(emitter) = Emitter::new(world, kind, seed) else {
+        return TracedPhotons {
+            photons: Vec::new(),
+            counts: TraceCounts::default(),
+            rays: 0,
+            interrupted: false,
+        };
+    };
+    let mut kept: Vec<Vec<TracedPhoton>> = Vec::new();
+    let mut stored = 0usize;
+    let mut emitted: u64 = 0;
+    let mut rays = 0u64;
+    let mut batch = 16_384u64;
+    while stored < target && emitted < max_paths && !crate::interrupt::requested() {
+        let start = emitted;
+        let end = (start + batch).min(max_paths);
+        let step = chunk_len(end - start);
+        // Photons expected per path so far, to size each chunk's buffer once.
+        let rate = if emitted == 0 {
+            1.0
+        } else {
+            stored as f64 / emitted as f64
+        };
+        let chunks: Vec<Chunk> = (0..(end - start).div_ceil(step))
+            .into_par_iter()
+            .map(|c| {
+                let paths = start + c * step..(start + (c + 1) * step).min(end);
+                let chunk = trace_chunk(&emitter, kind, paths, rate);
+                progress.inc(chunk.photons.len() as u64);
+                chunk
+            })
+            .collect();
+        for mut chunk in chunks {
+            rays += chunk.rays;
+            if stored >= target {
+                continue;
+            }
+            let room = target - stored;
+            if chunk.photons.len() < room {
+                emitted = chunk.end;
+            } else {
+                // The pass ends at the path that stores the last photon wanted.
+                chunk.photons.truncate(room);
+                emitted = chunk.photons[room - 1].path + 1;
+            }
+            stored += chunk.photons.len();
+            kept.push(chunk.photons);
+        }
+        progress.set_position(stored as u64);
+        // Grow batches towards the expected remainder so few batches are needed, with a little
+        // to spare: the paths of a batch past the target are traced for nothing.
+        let rate = stored.max(1) as f64 / emitted.max(1) as f64;
+        let remaining = (target - stored.min(target)) as f64 / rate;
+        batch = (remaining * 1.02).clamp(16_384.0, 4_000_000.0) as u64;
+    }
+    if crate::interrupt::requested() {
+        return TracedPhotons {
+            photons: Vec::new(),
+            counts: TraceCounts { emitted, stored: 0 },
+            rays,
+            interrupted: true,
+        };
+    }
+    let photons = to_records(&kept, stored, 1.0 / emitted.max(1) as f32);
+    TracedPhotons {
+        photons,
+        counts: TraceCounts {
+            emitted,
+            stored: stored as u64,
+        },
+        rays,
+        interrupted: false,
+    }
+}
+
+/// Paths `paths`, one after another on this thread.
+fn trace_chunk(
+    emitter: &Emitter,
+    kind: MapKind,
+    paths: std::ops::Range<u64>,
+    photons_per_path: f64,
+) -> Chunk {
+    let expected = (paths.end - paths.start) as f64 * photons_per_path * 1.1;
+    let mut chunk = Chunk {
+        photons: Vec::with_capacity(expected as usize + 16),
+        end: paths.end,
+        rays: 0,
+    };
+    if crate::interrupt::requested() {
+        return chunk;
+    }
+    for path in paths {
+        if let Some(start) = emitter.start(path) {
+            chunk.rays += trace_path(
+                emitter.world,
+                kind,
+                path,
+                start,
+                &mut chunk.photons,
+                &mut NoRayLog,
+            );
+        }
+    }
+    chunk
+}
+
+/// The stored records of the kept chunks, in order, each flux multiplied by `scale`.
+fn to_records(kept: &[Vec<TracedPhoton>], stored: usize, scale: f32) -> Vec<Photon> {
+    let mut photons = vec![Photon::default(); stored];
+    let mut rest = photons.as_mut_slice();
+    let mut pieces = Vec::with_capacity(kept.len());
+    for chunk in kept {
+        let (piece, tail) = rest.split_at_mut(chunk.len());
+        pieces.push((chunk.as_slice(), piece));
+        rest = tail;
+    }
+    pieces.into_par_iter().for_each(|(traced, records)| {
+        for (p, record) in traced.iter().zip(records) {
+            *record = Photon::new(p.position, p.flux * scale, p.direction, p.normal);
+        }
+    });
+    photons
+}
+
+/// Where a path reports each ray it casts: nowhere when tracing, a list for benchmarks.
+trait RayLog {
+    fn cast(&mut self, origin: Vec3, direction: Vec3);
+}
+
+struct NoRayLog;
+
+impl RayLog for NoRayLog {
+    #[inline(always)]
+    fn cast(&mut self, _: Vec3, _: Vec3) {}
+}
+
+impl RayLog for Vec<(Vec3, Vec3)> {
+    fn cast(&mut self, origin: Vec3, direction: Vec3) {
+        self.push((origin, direction));
+    }
+}
+
+/// Every ray (origin, unit direction) that the paths in `paths` cast, bounces included, in
+/// order: Embree alone can then be timed on exactly the tracer's rays.
+pub fn path_rays(
+    world: &World,
+    kind: MapKind,
+    seed: u64,
+    paths: std::ops::Range<u64>,
+) -> Vec<(Vec3, Vec3)> {
+    let Some(emitter) = Emitter::new(world, kind, seed) else {
+        return Vec::new();
+    };
+    let (mut rays, mut photons) = (Vec::new(), Vec::new());
+    for path in paths {
+        if let Some(start) = emitter.start(path) {
+            trace_path(world, kind, path, start, &mut photons, &mut rays);
+            photons.clear();
+        }
+    }
+    rays
+}
+
+/// Follows one path from its start, appending the photons it stores to `stored`; returns the
+/// number of rays cast.
 fn trace_path(
     world: &World,
     kind: MapKind,
-    chooser: &LightChooser,
-    aim: Option<crate::world::BoundingSphere>,
-    rng: &mut Rng,
-) -> Vec<TracedPhoton> {
-    let mut stored = Vec::new();
-    let l = chooser.pick(rng.next_f32());
-    let light = &world.description.lights[l];
-    let Emission {
+    path: u64,
+    start: PathStart,
+    stored: &mut Vec<TracedPhoton>,
+    log: &mut impl RayLog,
+) -> u64 {
+    let PathStart {
+        mut rng,
         origin,
         direction,
-        flux,
-    } = lights::emit(light, aim, rng);
-    let mut flux = flux / chooser.pdf[l];
-    if flux.max_element() <= 0.0 {
-        return stored;
-    }
+        mut flux,
+    } = start;
+    let mut rays = 0;
     let eps = world.ray_epsilon();
-    // Start just off the light: the first ray would otherwise hit the light's own surface.
-    let (mut o, mut d) = (origin + direction * eps, direction);
+    let (mut o, mut d) = (origin, direction);
     let mut specular_seen = false;
     let mut diffuse_seen = false;
     for _ in 0..MAX_BOUNCES {
+        rays += 1;
+        log.cast(o, d);
         let Some(hit) = world.intersect(o, d, 0.0, f32::INFINITY) else {
             break;
         };
@@ -209,6 +433,7 @@ fn trace_path(
                         flux,
                         direction: d,
                         normal: ns,
+                        path,
                     });
                 }
                 if kind == MapKind::Caustic {
@@ -245,5 +470,5 @@ fn trace_path(
         o = hit.position + side * eps;
         d = next;
     }
-    stored
+    rays
 }

@@ -67,28 +67,28 @@ pub fn emitted_radiance(light: &Light, cos_out: f32) -> Vec3 {
     }
 }
 
+/// The cone from `origin` that just holds the sphere `aim`: its unit axis and the cosine of its
+/// half-angle. `None` without an aim or from inside the sphere.
+fn aim_cone(aim: Option<BoundingSphere>, origin: Vec3) -> Option<(Vec3, f32)> {
+    let b = aim?;
+    let to = b.center - origin;
+    let d2 = to.length_squared();
+    if d2 <= b.radius * b.radius {
+        return None;
+    }
+    let cos_max = (1.0 - b.radius * b.radius / d2).max(0.0).sqrt();
+    Some((to / d2.sqrt(), cos_max))
+}
+
 /// Emits one photon. With `aim`, directions are drawn only towards that sphere (when the
 /// emission point is outside it) and the flux is weighted by the solid angle kept.
 pub fn emit(light: &Light, aim: Option<BoundingSphere>, rng: &mut Rng) -> Emission {
-    let cone = |origin: Vec3, rng: &mut Rng| {
-        let b = aim?;
-        let to = b.center - origin;
-        let d2 = to.length_squared();
-        if d2 <= b.radius * b.radius {
-            return None;
-        }
-        let cos_max = (1.0 - b.radius * b.radius / d2).max(0.0).sqrt();
-        Some((
-            uniform_cone(to / d2.sqrt(), cos_max, rng.next_2d()),
-            cone_solid_angle(cos_max),
-        ))
-    };
     match light {
-        Light::Point { position, power } => match cone(*position, rng) {
-            Some((direction, omega)) => Emission {
+        Light::Point { position, power } => match aim_cone(aim, *position) {
+            Some((axis, cos_max)) => Emission {
                 origin: *position,
-                direction,
-                flux: *power * (omega / (4.0 * PI)),
+                direction: uniform_cone(axis, cos_max, rng.next_2d()),
+                flux: *power * (cone_solid_angle(cos_max) / (4.0 * PI)),
             },
             None => Emission {
                 origin: *position,
@@ -102,7 +102,7 @@ pub fn emit(light: &Light, aim: Option<BoundingSphere>, rng: &mut Rng) -> Emissi
             power,
         } => {
             let normal = uniform_sphere(rng.next_2d());
-            surface_emission(*center + *radius * normal, normal, *power, cone, rng)
+            surface_emission(*center + *radius * normal, normal, *power, aim, rng)
         }
         Light::Quad {
             corner,
@@ -116,7 +116,7 @@ pub fn emit(light: &Light, aim: Option<BoundingSphere>, rng: &mut Rng) -> Emissi
                 *corner + s * *edge_u + t * *edge_v,
                 normal,
                 *power,
-                cone,
+                aim,
                 rng,
             )
         }
@@ -128,17 +128,30 @@ fn surface_emission(
     origin: Vec3,
     normal: Vec3,
     power: Vec3,
-    cone: impl Fn(Vec3, &mut Rng) -> Option<(Vec3, f32)>,
+    aim: Option<BoundingSphere>,
     rng: &mut Rng,
 ) -> Emission {
-    match cone(origin, rng) {
-        // flux = L cosθ / (pdf_A pdf_ω) with L = Φ/(πA): Φ cosθ Ω / π.
-        Some((direction, omega)) => {
+    match aim_cone(aim, origin) {
+        Some((axis, cos_max)) => {
+            // When the whole cone lies behind the surface (half of an aimed sphere light) the
+            // photon carries nothing: skip drawing its direction. The test is
+            // n·axis < -(sin_max + δ) with δ = 1e-3, squared to spare a square root
+            // ((sin + δ)² < sin² + 3δ): every photon that could carry flux goes on below.
+            let along = normal.dot(axis);
+            if along < 0.0 && along * along > 1.0 - cos_max * cos_max + 3e-3 {
+                return Emission {
+                    origin,
+                    direction: axis,
+                    flux: Vec3::ZERO,
+                };
+            }
+            // flux = L cosθ / (pdf_A pdf_ω) with L = Φ/(πA): Φ cosθ Ω / π.
+            let direction = uniform_cone(axis, cos_max, rng.next_2d());
             let cos = direction.dot(normal).max(0.0);
             Emission {
                 origin,
                 direction,
-                flux: power * (cos * omega / PI),
+                flux: power * (cos * cone_solid_angle(cos_max) / PI),
             }
         }
         None => Emission {

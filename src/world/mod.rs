@@ -173,6 +173,13 @@ impl World {
         self.accel.occluded(origin, dir, tnear, tfar)
     }
 
+    /// Distance to the closest hit and nothing more: Embree's cost alone, for benchmarks.
+    pub fn closest_hit_distance(&self, origin: Vec3, dir: Vec3) -> Option<f32> {
+        self.accel
+            .intersect(origin, dir, 0.0, f32::INFINITY)
+            .map(|hit| hit.t)
+    }
+
     /// The closest hit along a ray with unit `dir`.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> Option<Interaction> {
         let hit = self.accel.intersect(origin, dir, tnear, tfar)?;

@@ -1,0 +1,267 @@
+//! Photon tracing against Embree alone, on the shipped scenes: the caustic map of
+//! `scenes/torus-knot.toml`, and the caustic and global maps of `scenes/cornell-box.toml`.
+//!
+//! The tracer side times [`trace_photons`] (every path until the target is stored, and the
+//! photon records; not the kd-tree). Two Embree sides time closest-hit queries only:
+//! - "embree emission": the first rays of the same paths (the same lights, the same aim at the
+//!   specular objects, the same random numbers), as many rays as the tracer casts;
+//! - "embree replay": exactly the rays the tracer casts, bounces included, replayed in order.
+//!
+//! The ratio of the tracer's rays per second to Embree's shows what everything that is not
+//! Embree costs. Against emission rays it also carries the difference between first rays and
+//! bounce rays (rays leaving a surface, inside glass); against the replay it does not.
+//! All run on 1 and 2 threads (rayon pools with flush-to-zero, as the renderer uses).
+//!
+//! `cargo bench --bench trace`. Criterion prints each figure; then each case runs a few rounds
+//! that time every side back to back, and a table of their medians, the ratios and the
+//! 2-thread speedups follows at the end. On a shared machine compare those ratios, not
+//! absolute times across runs.
+
+use criterion::{BenchmarkId, Criterion, Throughput};
+use dpm::photon::tracer::{MapKind, TracedPhotons, emission_rays, path_rays, trace_photons};
+use dpm::world::World;
+use glam::Vec3;
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+const SEED: u64 = 7;
+const THREADS: [usize; 2] = [1, 2];
+/// Rays per rayon task on the Embree side: big enough that scheduling is noise.
+const RAY_CHUNK: usize = 4096;
+
+struct Case {
+    name: &'static str,
+    scene: &'static str,
+    kind: MapKind,
+    target: usize,
+}
+
+const CASES: [Case; 3] = [
+    Case {
+        name: "torus-knot caustic",
+        scene: "scenes/torus-knot.toml",
+        kind: MapKind::Caustic,
+        target: 100_000,
+    },
+    Case {
+        name: "cornell-box caustic",
+        scene: "scenes/cornell-box.toml",
+        kind: MapKind::Caustic,
+        target: 100_000,
+    },
+    Case {
+        name: "cornell-box global",
+        scene: "scenes/cornell-box.toml",
+        kind: MapKind::Global { with_direct: true },
+        target: 200_000,
+    },
+];
+
+/// Which side of the comparison a timing belongs to.
+#[derive(Clone, Copy)]
+enum Side {
+    Tracer = 0,
+    Emission = 1,
+    Replay = 2,
+}
+
+/// Rounds of the closing table: each round times every side on 1 and 2 threads back to back,
+/// so that a change in the machine's load falls on all of them alike.
+const ROUNDS: usize = 9;
+
+fn world(scene: &str) -> World {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+    let description = dpm::scene::load(&path).expect("shipped scene loads");
+    World::new(description).expect("Embree builds the scene")
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    dpm::embree::thread_pool(threads).expect("rayon pool")
+}
+
+fn trace(world: &World, case: &Case) -> TracedPhotons {
+    trace_photons(world, case.kind, case.target, SEED, &ProgressBar::hidden())
+}
+
+/// Closest hits of `rays`, in parallel chunks; returns how many hit (so nothing is optimised
+/// away).
+fn embree_hits(world: &World, rays: &[(Vec3, Vec3)]) -> usize {
+    rays.par_chunks(RAY_CHUNK)
+        .map(|chunk| {
+            chunk
+                .iter()
+                .filter(|(o, d)| world.closest_hit_distance(*o, *d).is_some())
+                .count()
+        })
+        .sum()
+}
+
+/// One case: what the tracer stores and casts (measured once, untimed), and the seconds of
+/// each interleaved round by side and thread count.
+struct CaseFigures {
+    /// `seconds[side][threads index][round]`.
+    seconds: [[Vec<f64>; 2]; 3],
+    stored: u64,
+    rays: u64,
+    /// Emission rays: the first rays of as many paths as the tracer casts rays (fewer only
+    /// when a path carries no flux and casts nothing).
+    emission_rays: u64,
+    /// Replayed rays: those of the paths the map keeps (not those traced past the target).
+    replay_rays: u64,
+}
+
+fn bench_case(c: &mut Criterion, case: &Case, all_figures: &mut Vec<CaseFigures>) {
+    let world = world(case.scene);
+    let first = pool(1).install(|| trace(&world, case));
+    assert_eq!(first.photons.len(), case.target, "{}", case.name);
+    let emission = emission_rays(&world, case.kind, SEED, 0..first.rays);
+    assert!(!emission.is_empty(), "{}: no emission rays", case.name);
+    let replay = path_rays(&world, case.kind, SEED, 0..first.counts.emitted);
+    let mut figures = CaseFigures {
+        seconds: Default::default(),
+        stored: first.photons.len() as u64,
+        rays: first.rays,
+        emission_rays: emission.len() as u64,
+        replay_rays: replay.len() as u64,
+    };
+    drop(first);
+
+    let mut group = c.benchmark_group(case.name);
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3));
+    for threads in THREADS {
+        let pool = pool(threads);
+        group.throughput(Throughput::Elements(case.target as u64));
+        group.bench_function(BenchmarkId::new("tracer photons", threads), |b| {
+            b.iter_custom(|iters| {
+                let start = Instant::now();
+                for _ in 0..iters {
+                    black_box(pool.install(|| trace(&world, case)));
+                }
+                start.elapsed()
+            })
+        });
+        for (name, rays) in [
+            ("embree emission rays", &emission),
+            ("embree replay rays", &replay),
+        ] {
+            group.throughput(Throughput::Elements(rays.len() as u64));
+            group.bench_function(BenchmarkId::new(name, threads), |b| {
+                b.iter_custom(|iters| {
+                    let start = Instant::now();
+                    for _ in 0..iters {
+                        black_box(pool.install(|| embree_hits(&world, rays)));
+                    }
+                    start.elapsed()
+                })
+            });
+        }
+    }
+    group.finish();
+
+    let pools = THREADS.map(pool);
+    for _ in 0..ROUNDS {
+        for (t, pool) in pools.iter().enumerate() {
+            let tracer = seconds_of(|| pool.install(|| trace(&world, case)));
+            let emitted = seconds_of(|| pool.install(|| embree_hits(&world, &emission)));
+            let replayed = seconds_of(|| pool.install(|| embree_hits(&world, &replay)));
+            for (side, seconds) in [
+                (Side::Tracer, tracer),
+                (Side::Emission, emitted),
+                (Side::Replay, replayed),
+            ] {
+                figures.seconds[side as usize][t].push(seconds);
+            }
+        }
+    }
+    all_figures.push(figures);
+}
+
+/// Wall-clock seconds of one call.
+fn seconds_of<R>(f: impl FnOnce() -> R) -> f64 {
+    let start = Instant::now();
+    black_box(f());
+    start.elapsed().as_secs_f64()
+}
+
+fn median(samples: &[f64]) -> f64 {
+    let mut v = samples.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn print_table(all_figures: &[CaseFigures]) {
+    eprintln!();
+    eprintln!(
+        "trace bench: medians of {ROUNDS} interleaved rounds, in millions per second; \
+         ratio = tracer rays/s / Embree rays/s (median of the per-round ratios)"
+    );
+    eprintln!(
+        "{:<20} {:>3} {:>9} {:>9} {:>9} {:>6} {:>9} {:>6}",
+        "case", "thr", "photons", "tracer", "emission", "ratio", "replay", "ratio"
+    );
+    for (case, figures) in CASES.iter().zip(all_figures) {
+        let seconds = |side: Side, t: usize| &figures.seconds[side as usize][t];
+        // Per round: `count / seconds` of one side over the same of another.
+        let ratio = |(a, na): (Side, u64), (b, nb): (Side, u64), (ta, tb): (usize, usize)| {
+            let per_round: Vec<f64> = seconds(a, ta)
+                .iter()
+                .zip(seconds(b, tb))
+                .map(|(sa, sb)| (na as f64 / sa) / (nb as f64 / sb))
+                .collect();
+            median(&per_round)
+        };
+        let tracer = (Side::Tracer, figures.rays);
+        let emission = (Side::Emission, figures.emission_rays);
+        let replay = (Side::Replay, figures.replay_rays);
+        for (t, threads) in THREADS.iter().enumerate() {
+            let rate = |(side, n): (Side, u64)| n as f64 / median(seconds(side, t)) / 1e6;
+            eprintln!(
+                "{:<20} {:>3} {:>9.3} {:>9.3} {:>9.3} {:>6.2} {:>9.3} {:>6.2}",
+                case.name,
+                threads,
+                rate((Side::Tracer, figures.stored)),
+                rate(tracer),
+                rate(emission),
+                ratio(tracer, emission, (t, t)),
+                rate(replay),
+                ratio(tracer, replay, (t, t)),
+            );
+        }
+        let speedup = |side| ratio(side, side, (1, 0));
+        eprintln!(
+            "{:<20}     2-thread speedup: tracer {:.2}, emission {:.2}, replay {:.2}; \
+             rays per stored photon {:.2}",
+            "",
+            speedup(tracer),
+            speedup(emission),
+            speedup(replay),
+            figures.rays as f64 / figures.stored as f64
+        );
+    }
+}
+
+fn main() {
+    let mut criterion = Criterion::default().configure_from_args();
+    let mut all_figures = Vec::new();
+    for case in &CASES {
+        bench_case(&mut criterion, case, &mut all_figures);
+    }
+    criterion.final_summary();
+    if all_figures.len() == CASES.len() {
+        print_table(&all_figures);
+    }
+}
