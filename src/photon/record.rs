@@ -120,9 +120,10 @@ pub fn encode_rgbe(c: Vec3) -> [u8; 4] {
     if m.is_nan() || m <= 1e-38 || !m.is_finite() {
         return [0; 4];
     }
-    // m = f * 2^e with f in [0.5, 1)
-    let mut e = m.log2().floor() as i32 + 1;
-    let mut scale = (2.0f64).powi(8 - e);
+    // m = f * 2^e with f in [0.5, 1): e from the exponent bits (m is normal here), exact
+    // where log2 rounds up just below a power of two, and without its cost in photon tracing.
+    let mut e = ((m.to_bits() >> 23) & 0xff) as i32 - 126;
+    let mut scale = f64::from_bits(((8 - e + 1023) as u64) << 52);
     if (m as f64 * scale).round() >= 256.0 {
         e += 1;
         scale *= 0.5;
@@ -217,6 +218,22 @@ mod tests {
             assert!((d.y - c.y).abs() <= c.x / 255.0, "{s}: {c} -> {d}");
         }
         assert_eq!(decode_rgbe(encode_rgbe(Vec3::ONE)), Vec3::ONE);
+        // Just below and at powers of two, where a rounded log2 would pick the wrong exponent.
+        for k in [-100i32, -3, 0, 1, 7, 90] {
+            let p = 2f32.powi(k);
+            for m in [
+                p,
+                f32::from_bits(p.to_bits() - 1),
+                f32::from_bits(p.to_bits() + 1),
+            ] {
+                let d = decode_rgbe(encode_rgbe(Vec3::new(m, 0.3 * m, 0.0)));
+                assert!((d.x - m).abs() <= m / 255.0 && (d.y - 0.3 * m).abs() <= m / 255.0);
+                assert!(
+                    encode_rgbe(Vec3::splat(m))[0] >= 128,
+                    "{m}: mantissa kept high"
+                );
+            }
+        }
         assert_eq!(decode_rgbe(encode_rgbe(Vec3::ZERO)), Vec3::ZERO);
         assert_eq!(decode_rgbe(encode_rgbe(Vec3::splat(f32::NAN))), Vec3::ZERO);
     }
