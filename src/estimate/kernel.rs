@@ -51,6 +51,107 @@ impl RadialKernel {
     }
 }
 
+/// A kernel with its constants worked out once, for the estimates' inner loops: the same
+/// values as [`RadialKernel::weight`] up to rounding, without its divisions per photon.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PreparedKernel {
+    /// The constant value.
+    Constant(f64),
+    /// `a − b √y`.
+    Cone { a: f64, b: f64 },
+    /// `(a + b e^{−c y})`: Jensen's shape expanded, divided by its integral.
+    Gaussian { a: f64, b: f64, c: f64 },
+    /// `a (1 − y)`.
+    Epanechnikov(f64),
+}
+
+impl RadialKernel {
+    /// This kernel with its constants precomputed.
+    pub fn prepare(self) -> PreparedKernel {
+        match self {
+            RadialKernel::Constant => PreparedKernel::Constant(1.0 / PI),
+            RadialKernel::Cone { slope } => {
+                let a = 1.0 / ((1.0 - 2.0 / (3.0 * slope)) * PI);
+                PreparedKernel::Cone { a, b: a / slope }
+            }
+            RadialKernel::Gaussian => {
+                // 1 − (1 − e^{−βy/2})/(1 − e^{−β}) = (1 − s) + s e^{−βy/2}, s = 1/(1 − e^{−β}).
+                let s = 1.0 / (1.0 - (-GAUSSIAN_BETA).exp());
+                let norm = 1.0 / gaussian_shape_integral();
+                PreparedKernel::Gaussian {
+                    a: (1.0 - s) * norm,
+                    b: s * norm,
+                    c: GAUSSIAN_BETA / 2.0,
+                }
+            }
+            RadialKernel::Epanechnikov => PreparedKernel::Epanechnikov(2.0 / PI),
+        }
+    }
+}
+
+impl PreparedKernel {
+    /// Kernel value at `y`; zero for `y ≥ 1` and NaN, like [`RadialKernel::weight`].
+    #[inline(always)]
+    pub fn weight(self, y: f64) -> f64 {
+        if y.is_nan() || y >= 1.0 {
+            return 0.0;
+        }
+        let y = y.max(0.0);
+        match self {
+            PreparedKernel::Constant(c) => c,
+            PreparedKernel::Cone { a, b } => a - b * y.sqrt(),
+            PreparedKernel::Gaussian { a, b, c } => a + b * (-c * y).exp(),
+            PreparedKernel::Epanechnikov(a) => a * (1.0 - y),
+        }
+    }
+}
+
+/// A prepared kernel for one radius, taking the squared distance `d²` itself: `K(d²/r²)`
+/// with `1/r²` (and for the cone `1/r`) folded into the constants, so an inner loop does no
+/// division. Zero for `d² ≥ r²` and NaN.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadiusKernel {
+    kernel: PreparedKernel,
+    radius2: f64,
+}
+
+impl PreparedKernel {
+    /// This kernel at support radius `√radius2` (positive).
+    pub fn for_radius2(self, radius2: f64) -> RadiusKernel {
+        let kernel = match self {
+            PreparedKernel::Constant(c) => PreparedKernel::Constant(c),
+            PreparedKernel::Cone { a, b } => PreparedKernel::Cone {
+                a,
+                b: b / radius2.sqrt(),
+            },
+            PreparedKernel::Gaussian { a, b, c } => PreparedKernel::Gaussian {
+                a,
+                b,
+                c: c / radius2,
+            },
+            PreparedKernel::Epanechnikov(a) => PreparedKernel::Epanechnikov(a / radius2),
+        };
+        RadiusKernel { kernel, radius2 }
+    }
+}
+
+impl RadiusKernel {
+    #[inline(always)]
+    pub fn weight(self, d2: f64) -> f64 {
+        if d2.is_nan() || d2 >= self.radius2 {
+            return 0.0;
+        }
+        let d2 = d2.max(0.0);
+        match self.kernel {
+            PreparedKernel::Constant(c) => c,
+            PreparedKernel::Cone { a, b } => a - b * d2.sqrt(),
+            PreparedKernel::Gaussian { a, b, c } => a + b * (-c * d2).exp(),
+            // a (1 − d²/r²) with a/r² folded: a − (a/r²) d².
+            PreparedKernel::Epanechnikov(a_r2) => a_r2 * (self.radius2 - d2),
+        }
+    }
+}
+
 fn gaussian_shape(y: f64) -> f64 {
     let b = GAUSSIAN_BETA;
     1.0 - (1.0 - (-b * y / 2.0).exp()) / (1.0 - (-b).exp())
@@ -111,6 +212,38 @@ mod tests {
                 let w = k.weight(i as f64 / 100.0);
                 assert!(w > 0.0 && w <= last, "{k:?} at {i}");
                 last = w;
+            }
+        }
+    }
+
+    #[test]
+    fn prepared_kernels_match_the_definitions() {
+        for k in [
+            RadialKernel::Constant,
+            RadialKernel::Cone { slope: 1.0 },
+            RadialKernel::Cone { slope: 1.1 },
+            RadialKernel::Cone { slope: 5.0 },
+            RadialKernel::Gaussian,
+            RadialKernel::Epanechnikov,
+        ] {
+            let p = k.prepare();
+            for i in 0..=1000 {
+                let y = i as f64 / 1000.0;
+                let (a, b) = (k.weight(y), p.weight(y));
+                assert!((a - b).abs() <= 1e-12 * a.abs().max(1.0), "{k:?} at {y}");
+            }
+            for y in [1.0, 1.5, f64::NAN, f64::INFINITY] {
+                assert_eq!(p.weight(y), 0.0, "{k:?} at {y}");
+            }
+            for radius2 in [1e-6, 0.37, 4.0, 1e8] {
+                let r = p.for_radius2(radius2);
+                for i in 0..=1000 {
+                    let y = i as f64 / 1000.0;
+                    let (a, b) = (k.weight(y), r.weight(y * radius2));
+                    assert!((a - b).abs() <= 1e-12 * a.abs().max(1.0), "{k:?} at {y}");
+                }
+                assert_eq!(r.weight(radius2), 0.0);
+                assert_eq!(r.weight(f64::NAN), 0.0);
             }
         }
     }

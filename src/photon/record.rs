@@ -110,6 +110,12 @@ impl PhotonAttributes {
     pub fn normal(&self) -> Vec3 {
         decode_octahedral(self.normal)
     }
+    /// The encoded normal as one number: equal codes are equal normals, so a loop over photons
+    /// on one surface can test a normal once.
+    #[inline]
+    pub fn normal_code(&self) -> u16 {
+        u16::from_be_bytes(self.normal)
+    }
 }
 
 /// Shared-exponent RGB (Ward's RGBE), rounded to nearest: the error of every channel is at most

@@ -27,11 +27,11 @@ pub mod tensor;
 
 pub use gradient::{compute_gradients, gradient_pass};
 
+use super::classic::{PhotonReader, power_of};
 use super::kernel::RadialKernel;
-use super::{Query, RadianceEstimate, Scratch, normals_agree, power_f64, to_irradiance};
+use super::{Query, RadianceEstimate, Scratch, to_irradiance};
 use crate::photon::PhotonMap;
 use glam::{DVec3, Vec3};
-use gradient::scalar_power;
 use structure::{StructureTensor, TangentFrame};
 use tensor::{DiffusionTensor, diffusivity};
 
@@ -191,22 +191,28 @@ impl DiffusionEstimate {
         let mut structure = StructureTensor::new(frame);
         let mut isotropic = 0.0;
         let mut second_moment = 0.0;
+        let mut reader = PhotonReader::new(normal);
+        let epanechnikov = RadialKernel::Epanechnikov.prepare().for_radius2(r2);
+        let inv_rho2 = 1.0 / rho2;
         for n in scratch.neighbours.as_slice() {
-            let photon = &map.photon(n.slot);
-            if !normals_agree(photon, normal) {
+            let photon = map.attributes(n.slot);
+            if !reader.agrees(photon) {
                 continue;
             }
             let d2 = n.dist2 as f64;
             if d2 < rho2 {
-                structure.add(gradients.get(n.slot), 1.0 - d2 / rho2);
+                structure.add(gradients.get(n.slot), 1.0 - d2 * inv_rho2);
             }
-            let w = RadialKernel::Epanechnikov.weight(d2 / r2);
-            let phi = scalar_power(photon);
-            isotropic += w * phi;
-            second_moment += w * phi * phi;
+            let w = epanechnikov.weight(d2);
+            // Three times the channel mean (`gradient::scalar_power`); the thirds are taken
+            // once after the loop rather than divided per photon.
+            let power = power_of(photon);
+            let phi3 = power.x + power.y + power.z;
+            isotropic += w * phi3;
+            second_moment += w * phi3 * phi3;
         }
-        let isotropic = isotropic / r2;
-        let noise = gradient_noise(second_moment / r2, p.gradient_radius as f64);
+        let isotropic = isotropic / (3.0 * r2);
+        let noise = gradient_noise(second_moment / (9.0 * r2), p.gradient_radius as f64);
         let eigen = structure.average().eigen();
         let signal = (eigen.major - p.noise_floor * noise).max(0.0);
         let contrast = match p.units {
@@ -274,19 +280,20 @@ impl RadianceEstimate for DiffusionEstimate {
 
     fn irradiance(&self, map: &PhotonMap, query: &Query, scratch: &mut Scratch) -> Vec3 {
         let (tensor, _) = self.analyse(map, query, scratch);
-        let kernel = self.params.kernel.radial();
+        let kernel = self.params.kernel.radial().prepare();
         let r2 = sq(self.params.radius);
         let x = query.position;
-        let normal = tensor.x3.as_vec3();
+        let mut reader = PhotonReader::new(tensor.x3.as_vec3());
+        let metric = tensor.metric(r2);
         let mut sum = DVec3::ZERO;
         for n in scratch.neighbours.as_slice() {
             if n.dist2 as f64 >= r2 {
                 continue;
             }
-            let photon = &map.photon(n.slot);
-            if normals_agree(photon, normal) {
-                let d = (photon.position() - x).as_dvec3();
-                sum += kernel.weight(tensor.scaled_mahalanobis(d, r2)) * power_f64(photon);
+            let photon = map.attributes(n.slot);
+            if reader.agrees(photon) {
+                let d = (map.position(n.slot) - x).as_dvec3();
+                sum += kernel.weight(metric.distance(d)) * power_of(photon);
             }
         }
         to_irradiance(sum * (tensor.plane_normalisation() / r2))
