@@ -148,6 +148,10 @@ impl KdTree {
         let n = self.len() as u64;
         ((first_leaf * n) >> self.depth) as usize..((end_leaf * n) >> self.depth) as usize
     }
+    /// Positions in slot order, one slice per axis (for loops over a node's slots).
+    pub fn coordinates(&self) -> (&[f32], &[f32], &[f32]) {
+        (&self.xs, &self.ys, &self.zs)
+    }
     /// Heap bytes held: positions, source indices and split planes.
     pub fn heap_bytes(&self) -> usize {
         (self.xs.capacity() + self.ys.capacity() + self.zs.capacity() + self.splits.capacity())

@@ -33,8 +33,15 @@ pub fn scalar_power(photon: &crate::photon::Photon) -> f64 {
 
 #[inline]
 fn scalar_power_of(attributes: &PhotonAttributes) -> f64 {
+    channel_sum(attributes) / 3.0
+}
+
+/// Three times the scalar power: the node sums and leaf scans add this, and the pass divides
+/// by three once at the end instead of per photon.
+#[inline]
+fn channel_sum(attributes: &PhotonAttributes) -> f64 {
     let p = attributes.power().as_dvec3();
-    (p.x + p.y + p.z) / 3.0
+    p.x + p.y + p.z
 }
 
 /// The gradient at every photon, in tree order, computed in parallel.
@@ -47,7 +54,8 @@ pub fn compute_gradients(map: &PhotonMap, radius: f32) -> Vec<Vec3> {
         "gradient radius must be positive, got {radius}"
     );
     let sums = NodeSums::build(map);
-    let scale = 4.0 / (PI * (radius as f64).powi(4));
+    // The sums are of channel sums, three times the scalar power.
+    let scale = 4.0 / (3.0 * PI * (radius as f64).powi(4));
     let tree = map.tree();
     let per_leaf: Vec<Vec<Vec3>> = (tree.leaf_base()..tree.node_end())
         .into_par_iter()
@@ -135,7 +143,7 @@ impl NodeSum {
         let c = node.centre();
         for s in slots {
             let a = map.attributes(s as u32);
-            let phi = scalar_power_of(a);
+            let phi = channel_sum(a);
             node.power += phi;
             node.moment += (map.position(s as u32).as_dvec3() - c) * phi;
             node.spread = node.spread.max(angle_between(node.axis, a.normal()));
@@ -325,14 +333,21 @@ impl<'a> NodeSums<'a> {
 
     /// Adds the photons of leaf `node` within the query's radius whose normals agree.
     fn scan_leaf(&self, map: &PhotonMap, node: usize, q: &Query, sum: &mut DVec3) {
+        let (xs, ys, zs) = self.tree.coordinates();
+        let (mut last_code, mut last_agrees) = (u32::MAX, false);
         for other in self.tree.node_slots(node) {
-            let p = map.position(other as u32);
-            let d = p - q.x;
+            let d = Vec3::new(xs[other] - q.x.x, ys[other] - q.x.y, zs[other] - q.x.z);
             // The radius search's distance, operation for operation.
             if d.x * d.x + d.y * d.y + d.z * d.z <= q.radius2 {
                 let a = map.attributes(other as u32);
-                if a.normal().dot(q.normal) >= NORMAL_AGREEMENT_MIN_COS {
-                    *sum += d.as_dvec3() * scalar_power_of(a);
+                // Photons of one leaf mostly share a surface: test each normal code once.
+                let code = u32::from(a.normal_code());
+                if code != last_code {
+                    last_code = code;
+                    last_agrees = a.normal().dot(q.normal) >= NORMAL_AGREEMENT_MIN_COS;
+                }
+                if last_agrees {
+                    *sum += d.as_dvec3() * channel_sum(a);
                 }
             }
         }
@@ -351,7 +366,7 @@ impl<'a> NodeSums<'a> {
         if !self.tree.is_empty() {
             self.visit(map, 1, &query, &mut sum);
         }
-        sum
+        sum / 3.0
     }
 
     #[cfg(test)]
