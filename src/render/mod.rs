@@ -1,8 +1,10 @@
 //! The eye pass: a pinhole camera, pixels rendered in parallel through the [`integrator`], and
 //! the orchestration of a whole render ([`pipeline`]: scene → Embree → photon maps → estimate →
-//! image). Owns pixels and sample placement; must not parse scenes or store photons.
+//! image) with its up-front memory check ([`memory_budget`]). Owns pixels and sample
+//! placement; must not parse scenes or store photons.
 
 pub mod integrator;
+pub mod memory_budget;
 pub mod pipeline;
 
 use crate::estimate::Scratch;

@@ -4,6 +4,7 @@
 //! per-phase timing table. Owns the `dpm render` options; must not implement any stage itself.
 
 use super::integrator::{EstimatedMap, Indirect, Integrator};
+use super::memory_budget::check_memory;
 use super::{PinholeCamera, render_image};
 use crate::embree::{self, EmbreeError};
 use crate::estimate::RadianceEstimate;
@@ -528,101 +529,4 @@ fn photon_maps(
         saved = Some(path.clone());
     }
     Ok((caustic, global, saved))
-}
-
-/// Bytes one stored photon costs while its map is traced and used: the 20-byte record, about
-/// 16 bytes of kd-tree (a point and an index), and the tracer's 48-byte record of it (four
-/// vectors) that lives until the map is built.
-pub const BYTES_PER_PHOTON: u64 = 20 + 16 + 48;
-/// Extra bytes a caustic photon costs with the diffusion estimate: its gradient.
-pub const GRADIENT_BYTES: u64 = 12;
-/// Bytes a pixel costs: the linear image, its checked copy and the encoded file in memory.
-pub const BYTES_PER_PIXEL: u64 = 40;
-/// What is assumed available when /proc/meminfo cannot be read.
-pub const FALLBACK_MEMORY: u64 = 16 << 30;
-
-/// Estimated peak memory of the photon maps and the image, in bytes (saturating). Loaded
-/// maps need no tracing records, so for them this is an overestimate.
-pub fn memory_estimate(wanted: &[MapInfo], diffusion: bool, width: u32, height: u32) -> u64 {
-    let photons = wanted.iter().fold(0u64, |sum, info| {
-        let per = BYTES_PER_PHOTON
-            + if diffusion && info.kind == MapKind::Caustic {
-                GRADIENT_BYTES
-            } else {
-                0
-            };
-        sum.saturating_add(info.target.saturating_mul(per))
-    });
-    photons.saturating_add((width as u64 * height as u64).saturating_mul(BYTES_PER_PIXEL))
-}
-
-/// Memory available to this process: MemAvailable from /proc/meminfo, else
-/// [`FALLBACK_MEMORY`]; with where the figure comes from.
-pub fn available_memory() -> (u64, &'static str) {
-    let from_meminfo = std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|text| {
-            let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-            Some(kib.saturating_mul(1024))
-        });
-    match from_meminfo {
-        Some(bytes) => (bytes, "MemAvailable in /proc/meminfo"),
-        None => (
-            FALLBACK_MEMORY,
-            "a fixed cap; /proc/meminfo could not be read",
-        ),
-    }
-}
-
-/// Bytes in binary units, e.g. "3.7 GiB".
-pub fn human_bytes(bytes: u64) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut value = bytes as f64;
-    let mut unit = 0;
-    while value >= 1024.0 && unit + 1 < units.len() {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} bytes")
-    } else {
-        format!("{value:.1} {}", units[unit])
-    }
-}
-
-/// Refuses, before anything is allocated, photon counts (and an image size) that would not
-/// fit in memory.
-fn check_memory(args: &RenderArgs, world: &World, wanted: &[MapInfo]) -> Result<(), RenderError> {
-    let camera = &world.description.camera;
-    let diffusion = args.estimate.estimator == EstimatorKind::Diffusion;
-    let needed = memory_estimate(wanted, diffusion, camera.width, camera.height);
-    let (available, source) = available_memory();
-    if needed <= available {
-        return Ok(());
-    }
-    let mut what: Vec<String> = wanted
-        .iter()
-        .map(|w| match w.kind {
-            MapKind::Caustic => format!("--caustic-photons {}", w.target),
-            MapKind::Global { .. } => format!("--global-photons {}", w.target),
-        })
-        .collect();
-    what.push(format!(
-        "a {}x{} image (camera.resolution)",
-        camera.width, camera.height
-    ));
-    Err(RenderError::Invalid(format!(
-        "{} would need about {} of memory ({} bytes a photon{}, {BYTES_PER_PIXEL} a pixel), but \
-         only {} is available ({source}); lower the photon counts or the resolution",
-        what.join(", "),
-        human_bytes(needed),
-        BYTES_PER_PHOTON,
-        if diffusion {
-            format!(", {} with a gradient", BYTES_PER_PHOTON + GRADIENT_BYTES)
-        } else {
-            String::new()
-        },
-        human_bytes(available),
-    )))
 }
