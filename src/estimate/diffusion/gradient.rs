@@ -301,8 +301,12 @@ impl<'a> NodeSums<'a> {
             shared.moment += n.moment + (n.centre() - shared.centre) * n.power;
             return;
         }
-        // Each photon on its own: drop those the node is clear of or wholly inside.
-        let mut bits = active;
+        // Each photon on its own: drop those the node is clear of or wholly inside. A node wider
+        // than a disc is wholly inside none, and its children sort the photons out as well, so
+        // that work is only done once nodes are small (it is most of the pass otherwise).
+        let is_leaf = node >= self.tree.leaf_base();
+        let wide = (nu - nl).length_squared() > 4.0 * r2;
+        let mut bits = if wide && !is_leaf { 0 } else { active };
         while bits != 0 {
             let i = bits.trailing_zeros() as usize;
             bits &= bits - 1;
@@ -318,7 +322,7 @@ impl<'a> NodeSums<'a> {
         if active == 0 {
             return;
         }
-        if node >= self.tree.leaf_base() {
+        if is_leaf {
             let mut bits = active;
             while bits != 0 {
                 let i = bits.trailing_zeros() as usize;
@@ -335,22 +339,28 @@ impl<'a> NodeSums<'a> {
     fn scan_leaf(&self, map: &PhotonMap, node: usize, q: &Query, sum: &mut DVec3) {
         let (xs, ys, zs) = self.tree.coordinates();
         let (mut last_code, mut last_agrees) = (u32::MAX, false);
+        // Summed in a local so it stays in registers rather than going through `sum` each time.
+        let mut local = DVec3::ZERO;
         for other in self.tree.node_slots(node) {
             let d = Vec3::new(xs[other] - q.x.x, ys[other] - q.x.y, zs[other] - q.x.z);
-            // The radius search's distance, operation for operation.
-            if d.x * d.x + d.y * d.y + d.z * d.z <= q.radius2 {
-                let a = map.attributes(other as u32);
-                // Photons of one leaf mostly share a surface: test each normal code once.
-                let code = u32::from(a.normal_code());
-                if code != last_code {
-                    last_code = code;
-                    last_agrees = a.normal().dot(q.normal) >= NORMAL_AGREEMENT_MIN_COS;
-                }
-                if last_agrees {
-                    *sum += d.as_dvec3() * channel_sum(a);
-                }
+            let a = map.attributes(other as u32);
+            // Photons of one leaf mostly share a surface: test each normal code once.
+            let code = u32::from(a.normal_code());
+            if code != last_code {
+                last_code = code;
+                last_agrees = a.normal().dot(q.normal) >= NORMAL_AGREEMENT_MIN_COS;
             }
+            // The radius search's distance, operation for operation; a weight rather than a
+            // branch, since about half of a rim leaf's photons are inside.
+            let inside = d.x * d.x + d.y * d.y + d.z * d.z <= q.radius2;
+            let weight = if inside && last_agrees {
+                channel_sum(a)
+            } else {
+                0.0
+            };
+            local += d.as_dvec3() * weight;
         }
+        *sum += local;
     }
 
     /// `Σ (x_i − x) Φ_i` over the photons within `radius` of the photon in `slot` whose normals
