@@ -128,9 +128,14 @@ pub fn evaluate(
     bar: &ProgressBar,
 ) -> Vec<Vec3> {
     let mut values = vec![Vec3::ZERO; grid.len()];
-    values.par_chunks_mut(grid.width).enumerate().for_each_init(
-        Scratch::default,
-        |scratch, (row, out)| {
+    // One row per job: rows differ in cost by an order of magnitude (bright shapes against the
+    // background), and rayon's adaptive splitting otherwise leaves one thread with the last
+    // expensive block while the other idles.
+    values
+        .par_chunks_mut(grid.width)
+        .with_max_len(1)
+        .enumerate()
+        .for_each_init(Scratch::default, |scratch, (row, out)| {
             for (col, value) in out.iter_mut().enumerate() {
                 let c = grid.centre(row, col);
                 let query = Query {
@@ -140,8 +145,7 @@ pub fn evaluate(
                 *value = estimate.irradiance(map, &query, scratch);
             }
             bar.inc(1);
-        },
-    );
+        });
     bar.finish_and_clear();
     values
 }

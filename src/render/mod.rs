@@ -93,8 +93,11 @@ fn shade_pixels(
 ) -> Image {
     let (w, h) = (camera.width as usize, camera.height as usize);
     let mut pixels = vec![Vec3::ZERO; w * h];
+    // One row per job, so rows of very different cost (a caustic against empty floor) are
+    // shared out evenly instead of in rayon's adaptive blocks.
     pixels
         .par_chunks_mut(w)
+        .with_max_len(1)
         .enumerate()
         .for_each_init(Scratch::default, |scratch, (y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
