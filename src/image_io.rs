@@ -212,6 +212,16 @@ fn finite_pixels(
     }
 }
 
+/// The directory an output at `path` would be written into (`.` for a bare file name), when it
+/// does not exist: every writer checks this before work starts, so a typo costs nothing.
+pub fn missing_output_directory(path: &Path) -> Option<&Path> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    (!dir.is_dir()).then_some(dir)
+}
+
 /// Runs `encode` on a temporary file beside `path`, syncs it and renames it to `path`. On any
 /// failure the temporary file is removed and `path` is left as it was.
 pub fn write_atomically(

@@ -167,11 +167,7 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
         PathBuf::from(stem).with_extension("png")
     });
     ImageFormat::from_path(&output)?;
-    let dir = output
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
+    if let Some(dir) = image_io::missing_output_directory(&output) {
         return Err(ImageError::MissingDirectory {
             path: output.clone(),
             dir: dir.to_path_buf(),
@@ -419,11 +415,7 @@ fn validate_photon_files(args: &RenderArgs, output: &Path) -> Result<(), RenderE
                 path.display()
             )));
         }
-        let dir = path
-            .parent()
-            .filter(|d| !d.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        if !dir.is_dir() {
+        if let Some(dir) = image_io::missing_output_directory(path) {
             return Err(RenderError::Invalid(format!(
                 "--save-photons {}: directory {} does not exist",
                 path.display(),

@@ -248,11 +248,7 @@ fn output_path(
             path.display()
         )));
     }
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
+    if let Some(dir) = crate::image_io::missing_output_directory(&path) {
         return Err(invalid(format!(
             "--{flag} {}: directory {} does not exist",
             path.display(),
