@@ -197,6 +197,10 @@ fn angle_between(a: Vec3, b: Vec3) -> f32 {
 struct NodeSums<'a> {
     tree: &'a KdTree,
     nodes: Vec<NodeSum>,
+    /// Channel sum of the photon in each slot, for the leaf scan without decoding.
+    powers: Vec<f64>,
+    /// The normal code every photon of leaf `j` shares, if they all share one.
+    leaf_codes: Vec<Option<u16>>,
 }
 
 /// Largest angle between a node's cone and the query normal for the whole node to agree: the
@@ -232,7 +236,28 @@ impl<'a> NodeSums<'a> {
                 });
             level /= 2;
         }
-        Self { tree, nodes }
+        let powers = (0..map.len() as u32)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|s| channel_sum(map.attributes(s)))
+            .collect();
+        let leaf_codes = (leaf_base..end)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|leaf| {
+                let mut codes = tree
+                    .node_slots(leaf)
+                    .map(|s| map.attributes(s as u32).normal_code());
+                let first = codes.next()?;
+                codes.all(|c| c == first).then_some(first)
+            })
+            .collect();
+        Self {
+            tree,
+            nodes,
+            powers,
+            leaf_codes,
+        }
     }
 
     /// `Σ (x_i − x) Φ_i` for every photon of the leaf `leaf`, into `out` (one per slot, in
@@ -338,6 +363,44 @@ impl<'a> NodeSums<'a> {
     /// Adds the photons of leaf `node` within the query's radius whose normals agree.
     fn scan_leaf(&self, map: &PhotonMap, node: usize, q: &Query, sum: &mut DVec3) {
         let (xs, ys, zs) = self.tree.coordinates();
+        if let Some(code) = self.leaf_codes[node - self.tree.leaf_base()] {
+            // One surface: one normal test, then a straight loop over the leaf's arrays.
+            if crate::photon::record::decode_octahedral(code.to_be_bytes()).dot(q.normal)
+                < NORMAL_AGREEMENT_MIN_COS
+            {
+                return;
+            }
+            let slots = self.tree.node_slots(node);
+            let (xs, ys, zs) = (&xs[slots.clone()], &ys[slots.clone()], &zs[slots.clone()]);
+            let powers = &self.powers[slots];
+            // Eight independent partial sums per axis: a single running sum is a chain of
+            // dependent float adds that neither vectorises nor pipelines.
+            const LANES: usize = 8;
+            let mut acc = [[0.0f64; LANES]; 3];
+            let (qx, qy, qz, r2) = (q.x.x, q.x.y, q.x.z, q.radius2);
+            let mut add = |lane: usize, i: usize| {
+                let (dx, dy, dz) = (xs[i] - qx, ys[i] - qy, zs[i] - qz);
+                let inside = dx * dx + dy * dy + dz * dz <= r2;
+                let w = if inside { powers[i] } else { 0.0 };
+                acc[0][lane] += dx as f64 * w;
+                acc[1][lane] += dy as f64 * w;
+                acc[2][lane] += dz as f64 * w;
+            };
+            let n = powers.len().min(xs.len()).min(ys.len()).min(zs.len());
+            let mut start = 0;
+            while start + LANES <= n {
+                for lane in 0..LANES {
+                    add(lane, start + lane);
+                }
+                start += LANES;
+            }
+            for i in start..n {
+                add(i - start, i);
+            }
+            let [sx, sy, sz] = acc.map(|lanes| lanes.iter().sum::<f64>());
+            *sum += DVec3::new(sx, sy, sz);
+            return;
+        }
         let (mut last_code, mut last_agrees) = (u32::MAX, false);
         // Summed in a local so it stays in registers rather than going through `sum` each time.
         let mut local = DVec3::ZERO;
