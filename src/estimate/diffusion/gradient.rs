@@ -57,18 +57,25 @@ pub fn compute_gradients(map: &PhotonMap, radius: f32) -> Vec<Vec3> {
     // The sums are of channel sums, three times the scalar power.
     let scale = 4.0 / (3.0 * PI * (radius as f64).powi(4));
     let tree = map.tree();
-    let per_leaf: Vec<Vec<Vec3>> = (tree.leaf_base()..tree.node_end())
-        .into_par_iter()
+    // Each leaf writes its own run of the result (leaves own contiguous slots), so there is
+    // no per-leaf vector to gather and copy.
+    let mut gradients = vec![Vec3::ZERO; map.len()];
+    let mut runs = Vec::with_capacity(tree.node_end() - tree.leaf_base());
+    let mut rest = gradients.as_mut_slice();
+    for leaf in tree.leaf_base()..tree.node_end() {
+        let (run, after) = std::mem::take(&mut rest).split_at_mut(tree.node_slots(leaf).len());
+        runs.push((leaf, run));
+        rest = after;
+    }
+    runs.into_par_iter()
         .with_min_len(16)
-        .map_init(Vec::new, |sums_of_leaf, leaf| {
+        .for_each_init(Vec::new, |sums_of_leaf, (leaf, run)| {
             sums.leaf_sums(map, leaf, radius, sums_of_leaf);
-            sums_of_leaf
-                .iter()
-                .map(|&g| to_f32_direction_kept(g * scale))
-                .collect()
-        })
-        .collect();
-    per_leaf.concat()
+            for (g, &sum) in run.iter_mut().zip(sums_of_leaf.iter()) {
+                *g = to_f32_direction_kept(sum * scale);
+            }
+        });
+    gradients
 }
 
 /// Computes the gradients and stores them in the map (`map.set_gradients`). This is what the
