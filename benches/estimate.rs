@@ -13,6 +13,10 @@
 //!
 //! `cargo bench --bench estimate` (a few minutes).
 
+mod support;
+
+use support::Rng;
+
 use criterion::{
     Bencher, BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
 };
@@ -31,18 +35,6 @@ const PHOTONS: u64 = 1_000_000;
 const QUERIES: usize = 2048;
 const SAMPLES: usize = 10;
 const COUNTS: [usize; 3] = [50, 200, 400];
-
-/// xorshift64*: deterministic query points without a `rand` dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn unit(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 /// Points inside the constructed distribution's rectangle (centre (0.74, 0.70), half-sizes
 /// 0.14 × 0.12), at least 0.04 from its edges: a flat region at the shapes' density.

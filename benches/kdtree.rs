@@ -9,6 +9,10 @@
 //! `cargo bench --bench kdtree`. Samples are few and short so that the whole run takes a few
 //! minutes on two cores; on a shared machine compare medians across runs, not single runs.
 
+mod support;
+
+use support::Rng;
+
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use dpm::photon::{KdTree, Neighbours};
 use glam::Vec3;
@@ -22,18 +26,6 @@ const PHOTONS: usize = 1_000_000;
 const QUERIES: usize = 1 << 14;
 const QUERY_CHUNK: usize = 64;
 const KS: [usize; 3] = [50, 200, 400];
-
-/// xorshift64*: deterministic data without a `rand` dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn unit(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 /// A point on one of two surfaces: a tilted floor and an axis-aligned wall.
 fn on_surface(u: f32, v: f32, wall: bool) -> Vec3 {

@@ -182,16 +182,19 @@ mod tests {
             * PI
     }
 
+    /// Every kernel, the cone at three slopes.
+    const EVERY_KERNEL: [RadialKernel; 6] = [
+        RadialKernel::Constant,
+        RadialKernel::Cone { slope: 1.0 },
+        RadialKernel::Cone { slope: 1.1 },
+        RadialKernel::Cone { slope: 5.0 },
+        RadialKernel::Gaussian,
+        RadialKernel::Epanechnikov,
+    ];
+
     #[test]
     fn every_kernel_integrates_to_one_over_the_unit_disc() {
-        for k in [
-            RadialKernel::Constant,
-            RadialKernel::Cone { slope: 1.0 },
-            RadialKernel::Cone { slope: 1.1 },
-            RadialKernel::Cone { slope: 5.0 },
-            RadialKernel::Gaussian,
-            RadialKernel::Epanechnikov,
-        ] {
+        for k in EVERY_KERNEL {
             let s = disc_integral(k);
             assert!((s - 1.0).abs() < 1e-6, "{k:?} integrates to {s}");
         }
@@ -218,14 +221,7 @@ mod tests {
 
     #[test]
     fn prepared_kernels_match_the_definitions() {
-        for k in [
-            RadialKernel::Constant,
-            RadialKernel::Cone { slope: 1.0 },
-            RadialKernel::Cone { slope: 1.1 },
-            RadialKernel::Cone { slope: 5.0 },
-            RadialKernel::Gaussian,
-            RadialKernel::Epanechnikov,
-        ] {
+        for k in EVERY_KERNEL {
             let p = k.prepare();
             for i in 0..=1000 {
                 let y = i as f64 / 1000.0;
