@@ -10,4 +10,4 @@ pub mod tracer;
 
 pub use kdtree::{KdTree, Neighbours};
 pub use map::PhotonMap;
-pub use record::{Photon, PhotonAttributes};
+pub use record::{EncodedDirections, Photon, PhotonAttributes};

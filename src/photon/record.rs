@@ -19,11 +19,17 @@ impl Photon {
     /// `direction` is the direction of travel when the photon arrived (pointing into the surface);
     /// `normal` the surface normal on the side the photon arrived from.
     pub fn new(position: Vec3, power: Vec3, direction: Vec3, normal: Vec3) -> Self {
+        Self::with_directions(position, power, EncodedDirections::new(direction, normal))
+    }
+
+    /// The photon with its direction and normal encoded already.
+    #[inline]
+    pub fn with_directions(position: Vec3, power: Vec3, directions: EncodedDirections) -> Self {
         Self {
             position: position.to_array().map(f32::to_bits),
             power: encode_rgbe(power),
-            direction: encode_octahedral(direction),
-            normal: encode_octahedral(normal),
+            direction: directions.direction,
+            normal: directions.normal,
         }
     }
 
@@ -87,6 +93,24 @@ impl Photon {
     }
 }
 
+/// A photon's direction and normal as stored (4 bytes): the tracer encodes them where a path
+/// stores its photon and the power later, once the number of paths it is divided by is known.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct EncodedDirections {
+    direction: [u8; 2],
+    normal: [u8; 2],
+}
+
+impl EncodedDirections {
+    #[inline]
+    pub fn new(direction: Vec3, normal: Vec3) -> Self {
+        Self {
+            direction: encode_octahedral(direction),
+            normal: encode_octahedral(normal),
+        }
+    }
+}
+
 /// A photon without its position: 8 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
@@ -130,11 +154,11 @@ pub fn encode_rgbe(c: Vec3) -> [u8; 4] {
     // where log2 rounds up just below a power of two, and without its cost in photon tracing.
     let mut e = ((m.to_bits() >> 23) & 0xff) as i32 - 126;
     let mut scale = f64::from_bits(((8 - e + 1023) as u64) << 52);
-    if (m as f64 * scale).round() >= 256.0 {
+    if round_non_negative(m as f64 * scale) >= 256 {
         e += 1;
         scale *= 0.5;
     }
-    let q = |x: f32| ((x as f64) * scale).round().min(255.0) as u8;
+    let q = |x: f32| round_non_negative((x as f64) * scale).min(255) as u8;
     [q(c.x), q(c.y), q(c.z), (e + 128).clamp(0, 255) as u8]
 }
 
@@ -161,8 +185,16 @@ pub fn encode_octahedral(v: Vec3) -> [u8; 2] {
         x = (1.0 - oy.abs()) * sign(ox);
         y = (1.0 - ox.abs()) * sign(oy);
     }
-    let q = |t: f32| ((t.clamp(-1.0, 1.0) * 0.5 + 0.5) * 254.0).round() as u8;
+    let q = |t: f32| round_non_negative(((t.clamp(-1.0, 1.0) * 0.5 + 0.5) * 254.0) as f64) as u8;
     [q(x), q(y)]
+}
+
+/// `x.round()` for `0 ≤ x < 2^31` held exactly by an f32 times a power of two, as all callers
+/// pass: adding one half is then exact and the cast truncates, without a call to `round`
+/// (which photon tracing paid for on every stored photon).
+#[inline]
+fn round_non_negative(x: f64) -> u32 {
+    (x + 0.5) as u32
 }
 
 /// Decodes from a table of all 65,536 codes (768 KiB, built on first use): the estimates
@@ -242,6 +274,21 @@ mod tests {
         }
         assert_eq!(decode_rgbe(encode_rgbe(Vec3::ZERO)), Vec3::ZERO);
         assert_eq!(decode_rgbe(encode_rgbe(Vec3::splat(f32::NAN))), Vec3::ZERO);
+    }
+
+    #[test]
+    fn rounding_without_round_matches_round() {
+        let mut s = 7u32;
+        for i in 0..100_000u32 {
+            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+            let x = if i < 1024 {
+                // Every half step exactly: the ties.
+                i as f32 * 0.5
+            } else {
+                (s >> 8) as f32 / (1u32 << 24) as f32 * 300.0
+            };
+            assert_eq!(round_non_negative(x as f64), x.round() as u32, "{x}");
+        }
     }
 
     #[test]

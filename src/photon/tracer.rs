@@ -7,12 +7,12 @@
 //! Determinism: path `i` draws only from `Rng::for_index(seed, stream, i)` and paths are kept in
 //! index order, so the maps are identical whatever the thread count.
 
-use super::{Photon, PhotonMap};
+use super::{EncodedDirections, Photon, PhotonMap};
 use crate::optics::{fresnel_dielectric, reflect, refract};
 use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
 use crate::scene::Material;
-use crate::world::lights::{self, Emission};
-use crate::world::{Surface, World};
+use crate::world::lights::{self, Emission, LightEmitter};
+use crate::world::{ClosestHit, Surface, World};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -37,15 +37,16 @@ pub struct TraceCounts {
 /// Paths longer than this are cut: a photon trapped between mirrors must not loop forever.
 const MAX_BOUNCES: u32 = 32;
 
-/// A photon as traced, before the flux is divided by the number of paths emitted.
+/// A photon as traced, before the flux is divided by the number of paths emitted (32 bytes:
+/// the directions are encoded as stored, since their encoding does not depend on that number).
 #[derive(Clone, Copy)]
 struct TracedPhoton {
     position: Vec3,
     flux: Vec3,
-    direction: Vec3,
-    normal: Vec3,
-    /// Index of the path that stored it: where a pass that reaches its target stops counting.
-    path: u64,
+    directions: EncodedDirections,
+    /// The path that stored it, counted from the first path of its chunk: where a pass that
+    /// reaches its target stops counting.
+    path_in_chunk: u32,
 }
 
 /// Splits photon paths among the lights in proportion to their power.
@@ -91,7 +92,8 @@ impl LightChooser {
 struct Emitter<'w> {
     world: &'w World,
     chooser: LightChooser,
-    aim: Option<crate::world::BoundingSphere>,
+    /// One per light, in the scene's order.
+    lights: Vec<LightEmitter>,
     streams: StreamSeed,
     ray_epsilon: f32,
 }
@@ -113,7 +115,9 @@ impl<'w> Emitter<'w> {
         Some(Self {
             world,
             chooser: LightChooser::new(world)?,
-            aim,
+            lights: (world.description.lights.iter())
+                .map(|light| LightEmitter::new(light, aim))
+                .collect(),
             streams: StreamSeed::new(seed, stream),
             ray_epsilon: world.ray_epsilon(),
         })
@@ -124,12 +128,11 @@ impl<'w> Emitter<'w> {
     fn start(&self, index: u64) -> Option<PathStart> {
         let mut rng = self.streams.rng(index);
         let l = self.chooser.pick(rng.next_f32());
-        let light = &self.world.description.lights[l];
         let Emission {
             origin,
             direction,
             flux,
-        } = lights::emit(light, self.aim, &mut rng);
+        } = self.lights[l].emit(&mut rng);
         let flux = flux / self.chooser.pdf[l];
         (flux.max_element() > 0.0).then(|| PathStart {
             rng,
@@ -191,10 +194,14 @@ pub struct TracedPhotons {
 /// What one rayon task traced: a run of consecutive paths.
 struct Chunk {
     photons: Vec<TracedPhoton>,
-    /// One past the last path of the run.
+    /// The first path of the run, and one past the last.
+    start: u64,
     end: u64,
     rays: u64,
 }
+
+/// Paths whose starts are drawn together before any of them is traced.
+const EMISSION_BATCH: u64 = 32;
 
 /// Paths per rayon task: many tasks per thread so that none waits long at the end of a batch,
 /// each long enough (hundreds of microseconds at least) that scheduling costs nothing.
@@ -259,7 +266,7 @@ pub fn trace_photons(
             } else {
                 // The pass ends at the path that stores the last photon wanted.
                 chunk.photons.truncate(room);
-                emitted = chunk.photons[room - 1].path + 1;
+                emitted = chunk.start + u64::from(chunk.photons[room - 1].path_in_chunk) + 1;
             }
             stored += chunk.photons.len();
             kept.push(chunk.photons);
@@ -301,22 +308,24 @@ fn trace_chunk(
     let expected = (paths.end - paths.start) as f64 * photons_per_path * 1.1;
     let mut chunk = Chunk {
         photons: Vec::with_capacity(expected as usize + 16),
+        start: paths.start,
         end: paths.end,
         rays: 0,
     };
     if crate::interrupt::requested() {
         return chunk;
     }
-    for path in paths {
-        if let Some(start) = emitter.start(path) {
-            chunk.rays += trace_path(
-                emitter.world,
-                kind,
-                path,
-                start,
-                &mut chunk.photons,
-                &mut NoRayLog,
-            );
+    let mut starts = Vec::with_capacity(EMISSION_BATCH as usize);
+    for batch_start in paths.clone().step_by(EMISSION_BATCH as usize) {
+        // Emission first, for a batch of paths: its chains of square roots and divisions then
+        // overlap from one path to the next, where path by path each waits on the one before.
+        let batch = batch_start..(batch_start + EMISSION_BATCH).min(paths.end);
+        starts.extend(batch.filter_map(|path| {
+            let start = emitter.start(path)?;
+            Some(LivePath::new((path - paths.start) as u32, start))
+        }));
+        for path in starts.drain(..) {
+            chunk.rays += trace_path(emitter.world, kind, path, &mut chunk.photons, &mut NoRayLog);
         }
     }
     chunk
@@ -334,7 +343,7 @@ fn to_records(kept: &[Vec<TracedPhoton>], stored: usize, scale: f32) -> Vec<Phot
     }
     pieces.into_par_iter().for_each(|(traced, records)| {
         for (p, record) in traced.iter().zip(records) {
-            *record = Photon::new(p.position, p.flux * scale, p.direction, p.normal);
+            *record = Photon::with_directions(p.position, p.flux * scale, p.directions);
         }
     });
     photons
@@ -372,103 +381,154 @@ pub fn path_rays(
     let (mut rays, mut photons) = (Vec::new(), Vec::new());
     for path in paths {
         if let Some(start) = emitter.start(path) {
-            trace_path(world, kind, path, start, &mut photons, &mut rays);
+            trace_path(
+                world,
+                kind,
+                LivePath::new(0, start),
+                &mut photons,
+                &mut rays,
+            );
             photons.clear();
         }
     }
     rays
 }
 
-/// Follows one path from its start, appending the photons it stores to `stored`; returns the
+/// A path on its way: its next ray and what it carries.
+struct LivePath {
+    path_in_chunk: u32,
+    rng: Rng,
+    origin: Vec3,
+    direction: Vec3,
+    flux: Vec3,
+    bounces: u32,
+    specular_seen: bool,
+    diffuse_seen: bool,
+}
+
+impl LivePath {
+    fn new(path_in_chunk: u32, start: PathStart) -> Self {
+        Self {
+            path_in_chunk,
+            rng: start.rng,
+            origin: start.origin,
+            direction: start.direction,
+            flux: start.flux,
+            bounces: 0,
+            specular_seen: false,
+            diffuse_seen: false,
+        }
+    }
+}
+
+/// Follows one path until it ends, appending the photons it stores to `stored`; returns the
 /// number of rays cast.
 fn trace_path(
     world: &World,
     kind: MapKind,
-    path: u64,
-    start: PathStart,
+    mut path: LivePath,
     stored: &mut Vec<TracedPhoton>,
     log: &mut impl RayLog,
 ) -> u64 {
-    let PathStart {
-        mut rng,
-        origin,
-        direction,
-        mut flux,
-    } = start;
-    let mut rays = 0;
     let eps = world.ray_epsilon();
-    let (mut o, mut d) = (origin, direction);
-    let mut specular_seen = false;
-    let mut diffuse_seen = false;
-    for _ in 0..MAX_BOUNCES {
+    let mut rays = 0;
+    loop {
         rays += 1;
-        log.cast(o, d);
-        let Some(hit) = world.intersect(o, d, 0.0, f32::INFINITY) else {
-            break;
-        };
-        let Surface::Material(m) = hit.surface else {
-            break;
-        };
-        // Normals facing the side the photon arrives from.
-        let entering = d.dot(hit.geometric_normal) < 0.0;
-        let ng = if entering {
-            hit.geometric_normal
-        } else {
-            -hit.geometric_normal
-        };
-        let ns = if entering {
-            hit.shading_normal
-        } else {
-            -hit.shading_normal
-        };
-        let next = match world.material(m) {
-            Material::Diffuse { albedo } => {
-                let store = match kind {
-                    MapKind::Caustic => specular_seen,
-                    MapKind::Global { with_direct } => diffuse_seen || with_direct,
-                };
-                if store {
-                    stored.push(TracedPhoton {
-                        position: hit.position,
-                        flux,
-                        direction: d,
-                        normal: ns,
-                        path,
-                    });
-                }
-                if kind == MapKind::Caustic {
-                    break;
-                }
-                let survive = albedo.max_element();
-                if rng.next_f32() >= survive {
-                    break;
-                }
-                flux *= *albedo / survive;
-                diffuse_seen = true;
-                cosine_hemisphere(ns, rng.next_2d())
-            }
-            Material::Mirror => {
-                if kind == MapKind::Caustic && diffuse_seen {
-                    break;
-                }
-                specular_seen = true;
-                reflect(d, ns)
-            }
-            Material::Glass { ior } => {
-                specular_seen = true;
-                let eta = if entering { 1.0 / ior } else { *ior };
-                let cos_i = -d.dot(ns);
-                if rng.next_f32() < fresnel_dielectric(cos_i, eta) {
-                    reflect(d, ns)
-                } else {
-                    refract(d, ns, eta).unwrap_or_else(|| reflect(d, ns))
-                }
-            }
-        };
-        // Leave the surface on the side the new direction points to.
-        let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
-        o = hit.position + side * eps;
-        d = next;
+        log.cast(path.origin, path.direction);
+        let hit = world.closest_hit(path.origin, path.direction, 0.0, f32::INFINITY);
+        if !advance(world, kind, eps, &mut path, hit, stored) {
+            return rays;
+        }
     }
-    rays
+}
+
+/// Moves one path on by the hit of its last ray, appending a photon to `stored` where it
+/// leaves one; returns whether the path goes on.
+#[inline]
+fn advance(
+    world: &World,
+    kind: MapKind,
+    eps: f32,
+    path: &mut LivePath,
+    closest: Option<ClosestHit>,
+    stored: &mut Vec<TracedPhoton>,
+) -> bool {
+    let Some(closest) = closest else {
+        return false;
+    };
+    let Surface::Material(m) = closest.surface else {
+        return false;
+    };
+    let material = world.material(m);
+    let d = path.direction;
+    if kind == MapKind::Caustic
+        && !path.specular_seen
+        && matches!(material, Material::Diffuse { .. })
+    {
+        // Straight from the light to a diffuse surface: no caustic, and nothing more to
+        // resolve (most of the rays aimed at a caustic object miss it).
+        return false;
+    }
+    let hit = world.resolve(closest);
+    // Normals facing the side the photon arrives from.
+    let entering = d.dot(hit.geometric_normal) < 0.0;
+    let ng = if entering {
+        hit.geometric_normal
+    } else {
+        -hit.geometric_normal
+    };
+    let ns = if entering {
+        hit.shading_normal
+    } else {
+        -hit.shading_normal
+    };
+    let next = match material {
+        Material::Diffuse { albedo } => {
+            let store = match kind {
+                MapKind::Caustic => path.specular_seen,
+                MapKind::Global { with_direct } => path.diffuse_seen || with_direct,
+            };
+            if store {
+                stored.push(TracedPhoton {
+                    position: hit.position,
+                    flux: path.flux,
+                    directions: EncodedDirections::new(d, ns),
+                    path_in_chunk: path.path_in_chunk,
+                });
+            }
+            if kind == MapKind::Caustic {
+                return false;
+            }
+            let survive = albedo.max_element();
+            if path.rng.next_f32() >= survive {
+                return false;
+            }
+            path.flux *= *albedo / survive;
+            path.diffuse_seen = true;
+            cosine_hemisphere(ns, path.rng.next_2d())
+        }
+        Material::Mirror => {
+            if kind == MapKind::Caustic && path.diffuse_seen {
+                return false;
+            }
+            path.specular_seen = true;
+            reflect(d, ns)
+        }
+        Material::Glass { ior } => {
+            path.specular_seen = true;
+            let eta = if entering { 1.0 / ior } else { *ior };
+            let cos_i = -d.dot(ns);
+            if path.rng.next_f32() < fresnel_dielectric(cos_i, eta) {
+                reflect(d, ns)
+            } else {
+                refract(d, ns, eta).unwrap_or_else(|| reflect(d, ns))
+            }
+        }
+    };
+    path.bounces += 1;
+    // Leave the surface on the side the new direction points to.
+    let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
+    path.origin = hit.position + side * eps;
+    path.direction = next;
+    path.bounces < MAX_BOUNCES
 }

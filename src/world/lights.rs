@@ -3,7 +3,10 @@
 //! radiance of a visible emitter. Owns the sampling densities; must not trace rays.
 
 use super::BoundingSphere;
-use crate::sampling::{Rng, cone_solid_angle, cosine_hemisphere, uniform_cone, uniform_sphere};
+use crate::sampling::{
+    ConeFrame, Rng, basis, cone_solid_angle, cosine_hemisphere, uniform_cone, uniform_disc,
+    uniform_sphere,
+};
 use crate::scene::Light;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -69,6 +72,7 @@ pub fn emitted_radiance(light: &Light, cos_out: f32) -> Vec3 {
 
 /// The cone from `origin` that just holds the sphere `aim`: its unit axis and the cosine of its
 /// half-angle. `None` without an aim or from inside the sphere.
+#[inline(always)]
 fn aim_cone(aim: Option<BoundingSphere>, origin: Vec3) -> Option<(Vec3, f32)> {
     let b = aim?;
     let to = b.center - origin;
@@ -76,54 +80,183 @@ fn aim_cone(aim: Option<BoundingSphere>, origin: Vec3) -> Option<(Vec3, f32)> {
     if d2 <= b.radius * b.radius {
         return None;
     }
-    let cos_max = (1.0 - b.radius * b.radius / d2).max(0.0).sqrt();
-    Some((to / d2.sqrt(), cos_max))
+    let inverse_distance = 1.0 / d2.sqrt();
+    let sin_max = b.radius * inverse_distance;
+    Some((
+        to * inverse_distance,
+        (1.0 - sin_max * sin_max).max(0.0).sqrt(),
+    ))
+}
+
+/// The cone, from the centre of a sphere light (centre `center`, radius `radius`), that holds
+/// every segment from the light to the sphere `aim`: its unit axis and the cosine of its
+/// half-angle. `None` without an aim, or when the two spheres are too close for a cone.
+///
+/// A segment's ends lie within r and R of the two centres, so it runs within θ of the axis
+/// between them, sin θ = (r + R) / D. Light that reaches the aim leaves in those directions.
+#[inline(always)]
+fn light_to_aim_cone(
+    aim: Option<BoundingSphere>,
+    center: Vec3,
+    radius: f32,
+) -> Option<(Vec3, f32)> {
+    let b = aim?;
+    let to = b.center - center;
+    let distance = to.length();
+    let sin_theta = (radius + b.radius) / distance;
+    (sin_theta < 1.0).then(|| (to / distance, (1.0 - sin_theta * sin_theta).sqrt()))
 }
 
 /// Emits one photon. With `aim`, directions are drawn only towards that sphere (when the
 /// emission point is outside it) and the flux is weighted by the solid angle kept.
 pub fn emit(light: &Light, aim: Option<BoundingSphere>, rng: &mut Rng) -> Emission {
-    match light {
-        Light::Point { position, power } => match aim_cone(aim, *position) {
-            Some((axis, cos_max)) => Emission {
-                origin: *position,
-                direction: uniform_cone(axis, cos_max, rng.next_2d()),
-                flux: *power * (cone_solid_angle(cos_max) / (4.0 * PI)),
+    LightEmitter::new(light, aim).emit(rng)
+}
+
+/// Emission from one light towards one aim, with all that stays the same from photon to photon
+/// worked out once: the tracer draws millions of photons from each light.
+#[derive(Clone, Debug)]
+pub struct LightEmitter {
+    source: Source,
+    aim: Option<BoundingSphere>,
+}
+
+#[derive(Clone, Debug)]
+enum Source {
+    /// Directions from the cone that holds the aim, or from the whole sphere.
+    Point {
+        position: Vec3,
+        cone: Option<ConeFrame>,
+        flux: Vec3,
+    },
+    /// Aimed: a direction from the cone that holds the aim (see [`light_to_aim_cone`]), then
+    /// a point of the light's disc as seen from that direction, lifted onto the side of the
+    /// sphere that faces it. A sphere of uniform radiance L shows the area πr² in every
+    /// direction, so every such photon carries the same flux, L πr² Ω = Φ Ω / 4π, and none is
+    /// drawn behind the surface it leaves. Not aimed: a point, then a cosine-weighted direction.
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        toward_aim: Option<ConeFrame>,
+        power: Vec3,
+    },
+    Quad {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        normal: Vec3,
+        power: Vec3,
+    },
+}
+
+impl LightEmitter {
+    pub fn new(light: &Light, aim: Option<BoundingSphere>) -> Self {
+        let source = match *light {
+            Light::Point { position, power } => {
+                let cone = aim_cone(aim, position).map(|(axis, cos)| ConeFrame::new(axis, cos));
+                let flux = match cone {
+                    Some(cone) => power * (cone.solid_angle() / (4.0 * PI)),
+                    None => power,
+                };
+                Source::Point {
+                    position,
+                    cone,
+                    flux,
+                }
+            }
+            Light::Sphere {
+                center,
+                radius,
+                power,
+            } => {
+                let toward_aim = light_to_aim_cone(aim, center, radius)
+                    .map(|(axis, cos)| ConeFrame::new(axis, cos));
+                Source::Sphere {
+                    center,
+                    radius,
+                    toward_aim,
+                    power,
+                }
+            }
+            Light::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                power,
+            } => Source::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                normal: quad_area_normal(edge_u, edge_v).1,
+                power,
             },
-            None => Emission {
-                origin: *position,
-                direction: uniform_sphere(rng.next_2d()),
-                flux: *power,
+        };
+        Self { source, aim }
+    }
+
+    /// One photon, drawn from `rng`.
+    #[inline(always)]
+    pub fn emit(&self, rng: &mut Rng) -> Emission {
+        match self.source {
+            Source::Point {
+                position,
+                cone,
+                flux,
+            } => Emission {
+                origin: position,
+                direction: match cone {
+                    Some(cone) => cone.sample(rng.next_2d()),
+                    None => uniform_sphere(rng.next_2d()),
+                },
+                flux,
             },
-        },
-        Light::Sphere {
-            center,
-            radius,
-            power,
-        } => {
-            let normal = uniform_sphere(rng.next_2d());
-            surface_emission(*center + *radius * normal, normal, *power, aim, rng)
-        }
-        Light::Quad {
-            corner,
-            edge_u,
-            edge_v,
-            power,
-        } => {
-            let (s, t) = rng.next_2d();
-            let (_, normal) = quad_area_normal(*edge_u, *edge_v);
-            surface_emission(
-                *corner + s * *edge_u + t * *edge_v,
+            Source::Sphere {
+                center,
+                radius,
+                toward_aim: Some(cone),
+                power,
+            } => {
+                let direction = cone.sample(rng.next_2d());
+                let (t, b) = basis(direction);
+                let (x, y) = uniform_disc(rng.next_2d());
+                let lift = (1.0 - x * x - y * y).max(0.0).sqrt();
+                Emission {
+                    origin: center + radius * (t * x + b * y + direction * lift),
+                    direction,
+                    flux: power * (cone.solid_angle() / (4.0 * PI)),
+                }
+            }
+            Source::Sphere {
+                center,
+                radius,
+                toward_aim: None,
+                power,
+            } => {
+                let normal = uniform_sphere(rng.next_2d());
+                surface_emission(center + radius * normal, normal, power, self.aim, rng)
+            }
+            Source::Quad {
+                corner,
+                edge_u,
+                edge_v,
                 normal,
-                *power,
-                aim,
-                rng,
-            )
+                power,
+            } => {
+                let (s, t) = rng.next_2d();
+                surface_emission(
+                    corner + s * edge_u + t * edge_v,
+                    normal,
+                    power,
+                    self.aim,
+                    rng,
+                )
+            }
         }
     }
 }
 
 /// Lambertian emission from a point on an area light (area pdf already folded into `power`).
+#[inline(always)]
 fn surface_emission(
     origin: Vec3,
     normal: Vec3,
@@ -293,11 +426,22 @@ mod tests {
     /// Aiming photons at a sphere keeps the flux that reaches it unbiased.
     #[test]
     fn aimed_emission_preserves_the_flux_into_the_target() {
-        let target = BoundingSphere {
-            center: Vec3::new(0.0, 0.0, 0.0),
-            radius: 0.3,
-        };
-        for light in lights() {
+        // Far enough that a sphere light draws from a cap (sin θ = 0.27), and so near that the
+        // cap is almost the whole light (sin θ = 0.9).
+        let targets = [
+            BoundingSphere {
+                center: Vec3::new(0.0, 0.0, 0.0),
+                radius: 0.3,
+            },
+            BoundingSphere {
+                center: Vec3::new(0.0, 0.2, 1.4),
+                radius: 0.3,
+            },
+        ];
+        for (light, target) in lights()
+            .into_iter()
+            .flat_map(|l| targets.map(|t| (l.clone(), t)))
+        {
             let hits = |aim: Option<BoundingSphere>, seed: u64| {
                 let m = 1_000_000;
                 let mut flux = Vec3::ZERO;
@@ -317,6 +461,56 @@ mod tests {
             let plain = hits(None, 4);
             let rel = (aimed - plain).abs().max_element() / plain.max_element();
             assert!(rel < 0.03, "{light:?}: aimed {aimed} vs plain {plain}");
+        }
+    }
+
+    /// Every segment from a sphere light to the aimed sphere lies in the cone that aimed sphere
+    /// lights draw their directions from.
+    #[test]
+    fn the_cone_from_a_sphere_light_holds_every_segment_to_the_aim() {
+        let (center, radius) = (Vec3::new(0.3, -0.2, 2.0), 0.25);
+        let mut rng = Rng::for_index(9, Stream::CausticPhotons, 0);
+        let mut tested = 0;
+        for k in 0..200 {
+            let aim = BoundingSphere {
+                center: uniform_sphere(rng.next_2d()) * (0.3 + 0.02 * k as f32),
+                radius: 0.05 + 0.002 * k as f32,
+            };
+            let Some((axis, cos_max)) = light_to_aim_cone(Some(aim), center, radius) else {
+                assert!(radius + aim.radius >= (aim.center - center).length());
+                continue;
+            };
+            for _ in 0..500 {
+                // Points on both surfaces, where the segments lean furthest from the axis.
+                let x = center + radius * uniform_sphere(rng.next_2d());
+                let y = aim.center + aim.radius * uniform_sphere(rng.next_2d());
+                let d = (y - x).normalize();
+                assert!(d.dot(axis) >= cos_max - 1e-5, "{x} -> {y} leaves the cone");
+                tested += 1;
+            }
+        }
+        assert!(tested > 50_000, "only {tested} segments tested");
+    }
+
+    /// Aimed photons of a sphere light leave from its surface, outwards, and carry equal flux.
+    #[test]
+    fn aimed_sphere_light_photons_leave_its_surface_outwards() {
+        let light = lights()[1].clone();
+        let Light::Sphere { center, radius, .. } = light else {
+            unreachable!()
+        };
+        let aim = Some(BoundingSphere {
+            center: Vec3::ZERO,
+            radius: 0.3,
+        });
+        let mut flux = None;
+        for i in 0..10_000 {
+            let mut rng = Rng::for_index(5, Stream::CausticPhotons, i);
+            let e = emit(&light, aim, &mut rng);
+            let n = (e.origin - center) / radius;
+            assert!((n.length() - 1.0).abs() < 1e-5, "origin off the sphere");
+            assert!(e.direction.dot(n) >= -1e-6, "leaves inwards");
+            assert_eq!(*flux.get_or_insert(e.flux), e.flux);
         }
     }
 }

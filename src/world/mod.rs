@@ -50,10 +50,32 @@ pub struct BoundingSphere {
     pub radius: f32,
 }
 
+/// A closest hit as Embree reports it, with what was hit but not yet the normals: a caustic
+/// path that reaches a diffuse surface before any specular one ends there without them, and
+/// resolving a mesh hit reads three vertices (cache misses on big meshes).
+#[derive(Clone, Copy, Debug)]
+pub struct ClosestHit {
+    hit: embree::Hit,
+    origin: Vec3,
+    dir: Vec3,
+    pub surface: Surface,
+}
+
+impl ClosestHit {
+    pub fn t(&self) -> f32 {
+        self.hit.t
+    }
+}
+
 pub struct World {
     pub description: SceneDescription,
     accel: embree::Scene,
     geometry: Vec<GeometryKind>,
+    /// What each geometry id shows: its material, or the light it is.
+    surfaces: Vec<Surface>,
+    /// Unit geometric normal of every triangle, by geometry id (empty for spheres and lights):
+    /// one load where a hit would otherwise read three indices and three vertices.
+    face_normals: Vec<Vec<Vec3>>,
     /// Bounds of all mirror and glass objects; `None` when the scene has none.
     pub specular_bounds: Option<BoundingSphere>,
     /// Diagonal of the scene's bounding box: sets the ray epsilon and the default radii.
@@ -65,6 +87,8 @@ impl World {
         let device = embree::Device::new()?;
         let mut builder = device.scene_builder()?;
         let mut geometry = Vec::new();
+        let mut surfaces = Vec::new();
+        let mut face_normals = Vec::new();
         let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         for (i, shape) in description.shapes.iter().enumerate() {
@@ -96,6 +120,18 @@ impl World {
                 }
             };
             geometry.push(kind);
+            surfaces.push(Surface::Material(material));
+            face_normals.push(match shape {
+                Shape::Triangles(mesh) => mesh
+                    .triangles
+                    .iter()
+                    .map(|t| {
+                        let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
+                        (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z)
+                    })
+                    .collect(),
+                Shape::Sphere { .. } => Vec::new(),
+            });
             lo = lo.min(a);
             hi = hi.max(b);
             if !matches!(
@@ -132,6 +168,8 @@ impl World {
                 }
             }
             geometry.push(GeometryKind::Emitter { light: i });
+            surfaces.push(Surface::Light(i));
+            face_normals.push(Vec::new());
         }
         let accel = builder.commit()?;
         let specular_bounds = (spec_lo.x <= spec_hi.x).then(|| BoundingSphere {
@@ -149,6 +187,8 @@ impl World {
             description,
             accel,
             geometry,
+            surfaces,
+            face_normals,
             specular_bounds,
             scale,
         })
@@ -180,40 +220,64 @@ impl World {
             .map(|hit| hit.t)
     }
 
-    /// The closest hit along a ray with unit `dir`.
+    /// The closest hit along a ray with unit `dir`, resolved for shading.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> Option<Interaction> {
+        self.closest_hit(origin, dir, tnear, tfar)
+            .map(|hit| self.resolve(hit))
+    }
+
+    /// The closest hit along a ray with unit `dir`, and what it hit, without its normals.
+    #[inline]
+    pub fn closest_hit(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tnear: f32,
+        tfar: f32,
+    ) -> Option<ClosestHit> {
         let hit = self.accel.intersect(origin, dir, tnear, tfar)?;
+        Some(ClosestHit {
+            hit,
+            origin,
+            dir,
+            surface: self.surfaces[hit.geometry as usize],
+        })
+    }
+
+    /// Position and normals of a hit.
+    pub fn resolve(&self, closest: ClosestHit) -> Interaction {
+        let ClosestHit {
+            hit,
+            origin,
+            dir,
+            surface,
+        } = closest;
         let position = origin + hit.t * dir;
         let kind = self.geometry[hit.geometry as usize];
-        let (geometric_normal, shading_normal, surface) = match kind {
+        let (geometric_normal, shading_normal) = match kind {
             GeometryKind::Sphere { shape } => {
-                let Shape::Sphere {
-                    center, material, ..
-                } = &self.description.shapes[shape]
-                else {
+                let Shape::Sphere { center, .. } = &self.description.shapes[shape] else {
                     unreachable!("geometry kinds follow the shapes")
                 };
                 let n = (position - *center).normalize_or(Vec3::Z);
-                (n, n, Surface::Material(*material))
+                (n, n)
             }
             GeometryKind::Mesh { shape } => {
                 let Shape::Triangles(mesh) = &self.description.shapes[shape] else {
                     unreachable!("geometry kinds follow the shapes")
                 };
-                let [i0, i1, i2] = mesh.triangles[hit.primitive as usize].map(|i| i as usize);
-                let p = &mesh.positions;
-                let ng = (p[i1] - p[i0])
-                    .cross(p[i2] - p[i0])
-                    .normalize_or(hit.normal.normalize_or(Vec3::Z));
+                let ng = self.face_normals[hit.geometry as usize][hit.primitive as usize];
                 let ns = match &mesh.normals {
                     Some(n) => {
+                        let [i0, i1, i2] =
+                            mesh.triangles[hit.primitive as usize].map(|i| i as usize);
                         let s = (1.0 - hit.u - hit.v) * n[i0] + hit.u * n[i1] + hit.v * n[i2];
                         let s = s.normalize_or(ng);
                         if s.dot(ng) < 0.0 { -s } else { s }
                     }
                     None => ng,
                 };
-                (ng, ns, Surface::Material(mesh.material))
+                (ng, ns)
             }
             GeometryKind::Emitter { light } => {
                 let n = match &self.description.lights[light] {
@@ -223,15 +287,15 @@ impl World {
                     }
                     Light::Point { .. } => unreachable!("point lights have no geometry"),
                 };
-                (n, n, Surface::Light(light))
+                (n, n)
             }
         };
-        Some(Interaction {
+        Interaction {
             t: hit.t,
             position,
             geometric_normal,
             shading_normal,
             surface,
-        })
+        }
     }
 }
