@@ -109,8 +109,8 @@ struct PathStart {
 impl<'w> Emitter<'w> {
     fn new(world: &'w World, kind: MapKind, seed: u64) -> Option<Self> {
         let (aim, stream) = match kind {
-            MapKind::Caustic => (world.specular_bounds, Stream::CausticPhotons),
-            MapKind::Global { .. } => (None, Stream::GlobalPhotons),
+            MapKind::Caustic => (world.caustic_targets.as_slice(), Stream::CausticPhotons),
+            MapKind::Global { .. } => (&[][..], Stream::GlobalPhotons),
         };
         Some(Self {
             world,

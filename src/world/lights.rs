@@ -3,9 +3,9 @@
 //! radiance of a visible emitter. Owns the sampling densities; must not trace rays.
 
 use super::BoundingSphere;
+use super::aim::UnionOfCones;
 use crate::sampling::{
-    ConeFrame, Rng, basis, cone_solid_angle, cosine_hemisphere, uniform_cone, uniform_disc,
-    uniform_sphere,
+    Rng, basis, cone_solid_angle, cosine_hemisphere, uniform_cone, uniform_disc, uniform_sphere,
 };
 use crate::scene::Light;
 use glam::Vec3;
@@ -70,74 +70,54 @@ pub fn emitted_radiance(light: &Light, cos_out: f32) -> Vec3 {
     }
 }
 
-/// The cone from `origin` that just holds the sphere `aim`: its unit axis and the cosine of its
-/// half-angle. `None` without an aim or from inside the sphere.
-#[inline(always)]
-fn aim_cone(aim: Option<BoundingSphere>, origin: Vec3) -> Option<(Vec3, f32)> {
-    let b = aim?;
-    let to = b.center - origin;
-    let d2 = to.length_squared();
-    if d2 <= b.radius * b.radius {
-        return None;
-    }
-    let inverse_distance = 1.0 / d2.sqrt();
-    let sin_max = b.radius * inverse_distance;
-    Some((
-        to * inverse_distance,
-        (1.0 - sin_max * sin_max).max(0.0).sqrt(),
-    ))
-}
-
 /// The cone, from the centre of a sphere light (centre `center`, radius `radius`), that holds
-/// every segment from the light to the sphere `aim`: its unit axis and the cosine of its
-/// half-angle. `None` without an aim, or when the two spheres are too close for a cone.
+/// every segment from the light to the sphere `target`: its unit axis and the cosine of its
+/// half-angle. `None` when the two spheres are too close for a cone.
 ///
 /// A segment's ends lie within r and R of the two centres, so it runs within θ of the axis
-/// between them, sin θ = (r + R) / D. Light that reaches the aim leaves in those directions.
+/// between them, sin θ = (r + R) / D. Light that reaches the target leaves in those directions.
 #[inline(always)]
-fn light_to_aim_cone(
-    aim: Option<BoundingSphere>,
-    center: Vec3,
-    radius: f32,
-) -> Option<(Vec3, f32)> {
-    let b = aim?;
+fn light_to_target_cone(target: &BoundingSphere, center: Vec3, radius: f32) -> Option<(Vec3, f32)> {
+    let b = target;
     let to = b.center - center;
     let distance = to.length();
     let sin_theta = (radius + b.radius) / distance;
     (sin_theta < 1.0).then(|| (to / distance, (1.0 - sin_theta * sin_theta).sqrt()))
 }
 
-/// Emits one photon. With `aim`, directions are drawn only towards that sphere (when the
-/// emission point is outside it) and the flux is weighted by the solid angle kept.
-pub fn emit(light: &Light, aim: Option<BoundingSphere>, rng: &mut Rng) -> Emission {
+/// Emits one photon. With targets in `aim`, directions are drawn only towards them (when the
+/// emission point is outside them all, see [`UnionOfCones`]) and the flux is weighted by the
+/// solid angle kept.
+pub fn emit(light: &Light, aim: &[BoundingSphere], rng: &mut Rng) -> Emission {
     LightEmitter::new(light, aim).emit(rng)
 }
 
-/// Emission from one light towards one aim, with all that stays the same from photon to photon
-/// worked out once: the tracer draws millions of photons from each light.
+/// Emission from one light towards its targets, with all that stays the same from photon to
+/// photon worked out once: the tracer draws millions of photons from each light.
 #[derive(Clone, Debug)]
 pub struct LightEmitter {
     source: Source,
-    aim: Option<BoundingSphere>,
+    aim: Vec<BoundingSphere>,
 }
 
 #[derive(Clone, Debug)]
 enum Source {
-    /// Directions from the cone that holds the aim, or from the whole sphere.
+    /// Directions from the cones towards the targets, or from the whole sphere; `flux` is
+    /// that of the whole sphere of directions, Φ / 4π per steradian when aimed.
     Point {
         position: Vec3,
-        cone: Option<ConeFrame>,
+        cones: Option<UnionOfCones>,
         flux: Vec3,
     },
-    /// Aimed: a direction from the cone that holds the aim (see [`light_to_aim_cone`]), then
-    /// a point of the light's disc as seen from that direction, lifted onto the side of the
-    /// sphere that faces it. A sphere of uniform radiance L shows the area πr² in every
-    /// direction, so every such photon carries the same flux, L πr² Ω = Φ Ω / 4π, and none is
-    /// drawn behind the surface it leaves. Not aimed: a point, then a cosine-weighted direction.
+    /// Aimed: a direction from the cones that hold the targets (see [`light_to_target_cone`]),
+    /// then a point of the light's disc as seen from that direction, lifted onto the side of
+    /// the sphere that faces it. A sphere of uniform radiance L shows the area πr² in every
+    /// direction, so a photon carries L πr² / pdf(ω) = Φ / (4π pdf(ω)), and none is drawn
+    /// behind the surface it leaves. Not aimed: a point, then a cosine-weighted direction.
     Sphere {
         center: Vec3,
         radius: f32,
-        toward_aim: Option<ConeFrame>,
+        toward_targets: Option<UnionOfCones>,
         power: Vec3,
     },
     Quad {
@@ -150,18 +130,18 @@ enum Source {
 }
 
 impl LightEmitter {
-    pub fn new(light: &Light, aim: Option<BoundingSphere>) -> Self {
+    pub fn new(light: &Light, aim: &[BoundingSphere]) -> Self {
         let source = match *light {
             Light::Point { position, power } => {
-                let cone = aim_cone(aim, position).map(|(axis, cos)| ConeFrame::new(axis, cos));
-                let flux = match cone {
-                    Some(cone) => power * (cone.solid_angle() / (4.0 * PI)),
-                    None => power,
-                };
+                let cones = UnionOfCones::towards(aim, position).map(UnionOfCones::prepared);
                 Source::Point {
                     position,
-                    cone,
-                    flux,
+                    cones,
+                    flux: if cones.is_some() {
+                        power / (4.0 * PI)
+                    } else {
+                        power
+                    },
                 }
             }
             Light::Sphere {
@@ -169,12 +149,15 @@ impl LightEmitter {
                 radius,
                 power,
             } => {
-                let toward_aim = light_to_aim_cone(aim, center, radius)
-                    .map(|(axis, cos)| ConeFrame::new(axis, cos));
+                let cones: Option<Vec<_>> = (aim.iter())
+                    .map(|target| light_to_target_cone(target, center, radius))
+                    .collect();
                 Source::Sphere {
                     center,
                     radius,
-                    toward_aim,
+                    toward_targets: cones
+                        .and_then(UnionOfCones::new)
+                        .map(UnionOfCones::prepared),
                     power,
                 }
             }
@@ -191,7 +174,10 @@ impl LightEmitter {
                 power,
             },
         };
-        Self { source, aim }
+        Self {
+            source,
+            aim: aim.to_vec(),
+        }
     }
 
     /// One photon, drawn from `rng`.
@@ -200,40 +186,47 @@ impl LightEmitter {
         match self.source {
             Source::Point {
                 position,
-                cone,
+                cones,
                 flux,
-            } => Emission {
-                origin: position,
-                direction: match cone {
-                    Some(cone) => cone.sample(rng.next_2d()),
-                    None => uniform_sphere(rng.next_2d()),
+            } => match cones {
+                Some(cones) => {
+                    let (direction, weight) = cones.sample(rng);
+                    Emission {
+                        origin: position,
+                        direction,
+                        flux: flux * weight,
+                    }
+                }
+                None => Emission {
+                    origin: position,
+                    direction: uniform_sphere(rng.next_2d()),
+                    flux,
                 },
-                flux,
             },
             Source::Sphere {
                 center,
                 radius,
-                toward_aim: Some(cone),
+                toward_targets: Some(cones),
                 power,
             } => {
-                let direction = cone.sample(rng.next_2d());
+                let (direction, weight) = cones.sample(rng);
                 let (t, b) = basis(direction);
                 let (x, y) = uniform_disc(rng.next_2d());
                 let lift = (1.0 - x * x - y * y).max(0.0).sqrt();
                 Emission {
                     origin: center + radius * (t * x + b * y + direction * lift),
                     direction,
-                    flux: power * (cone.solid_angle() / (4.0 * PI)),
+                    flux: power * (weight / (4.0 * PI)),
                 }
             }
             Source::Sphere {
                 center,
                 radius,
-                toward_aim: None,
+                toward_targets: None,
                 power,
             } => {
                 let normal = uniform_sphere(rng.next_2d());
-                surface_emission(center + radius * normal, normal, power, self.aim, rng)
+                surface_emission(center + radius * normal, normal, power, &self.aim, rng)
             }
             Source::Quad {
                 corner,
@@ -243,13 +236,8 @@ impl LightEmitter {
                 power,
             } => {
                 let (s, t) = rng.next_2d();
-                surface_emission(
-                    corner + s * edge_u + t * edge_v,
-                    normal,
-                    power,
-                    self.aim,
-                    rng,
-                )
+                let origin = corner + s * edge_u + t * edge_v;
+                surface_emission(origin, normal, power, &self.aim, rng)
             }
         }
     }
@@ -261,30 +249,27 @@ fn surface_emission(
     origin: Vec3,
     normal: Vec3,
     power: Vec3,
-    aim: Option<BoundingSphere>,
+    aim: &[BoundingSphere],
     rng: &mut Rng,
 ) -> Emission {
-    match aim_cone(aim, origin) {
-        Some((axis, cos_max)) => {
-            // When the whole cone lies behind the surface (half of an aimed sphere light) the
-            // photon carries nothing: skip drawing its direction. The test is
-            // n·axis < -(sin_max + δ) with δ = 1e-3, squared to spare a square root
-            // ((sin + δ)² < sin² + 3δ): every photon that could carry flux goes on below.
-            let along = normal.dot(axis);
-            if along < 0.0 && along * along > 1.0 - cos_max * cos_max + 3e-3 {
+    match UnionOfCones::towards(aim, origin) {
+        Some(cones) => {
+            // When every cone lies behind the surface (half of an aimed sphere light) the
+            // photon carries nothing: skip drawing its direction.
+            if cones.behind(normal) {
                 return Emission {
                     origin,
-                    direction: axis,
+                    direction: normal,
                     flux: Vec3::ZERO,
                 };
             }
-            // flux = L cosθ / (pdf_A pdf_ω) with L = Φ/(πA): Φ cosθ Ω / π.
-            let direction = uniform_cone(axis, cos_max, rng.next_2d());
+            // flux = L cosθ / (pdf_A pdf_ω) with L = Φ/(πA): Φ cosθ / (π pdf_ω).
+            let (direction, weight) = cones.sample(rng);
             let cos = direction.dot(normal).max(0.0);
             Emission {
                 origin,
                 direction,
-                flux: power * (cos * cone_solid_angle(cos_max) / PI),
+                flux: power * (cos * weight / PI),
             }
         }
         None => Emission {
@@ -405,7 +390,7 @@ mod tests {
             let m = 2_000_000;
             for i in 0..m {
                 let mut rng = Rng::for_index(2, Stream::CausticPhotons, i);
-                let e = emit(&light, None, &mut rng);
+                let e = emit(&light, &[], &mut rng);
                 if e.direction.z < 0.0 {
                     let t = -e.origin.z / e.direction.z;
                     let p = e.origin + t * e.direction;
@@ -423,44 +408,69 @@ mod tests {
         }
     }
 
-    /// Aiming photons at a sphere keeps the flux that reaches it unbiased.
+    /// Aiming photons at spheres keeps the flux that reaches each of them unbiased, for one
+    /// target and for two (the second apart from the first, as the Cornell box's are).
     #[test]
-    fn aimed_emission_preserves_the_flux_into_the_target() {
-        // Far enough that a sphere light draws from a cap (sin θ = 0.27), and so near that the
-        // cap is almost the whole light (sin θ = 0.9).
-        let targets = [
-            BoundingSphere {
-                center: Vec3::new(0.0, 0.0, 0.0),
-                radius: 0.3,
-            },
-            BoundingSphere {
-                center: Vec3::new(0.0, 0.2, 1.4),
-                radius: 0.3,
-            },
+    fn aimed_emission_preserves_the_flux_into_the_targets() {
+        let sphere = |x: f32, y: f32, z: f32, radius: f32| BoundingSphere {
+            center: Vec3::new(x, y, z),
+            radius,
+        };
+        // Far from the lights (a sphere light's cone has sin θ = 0.27), near them (0.79), and
+        // a far target with a second one off to the side.
+        let aims = [
+            vec![sphere(0.0, 0.0, 0.0, 0.3)],
+            vec![sphere(0.0, 0.2, 1.4, 0.3)],
+            vec![sphere(0.0, 0.0, 0.0, 0.3), sphere(1.2, 0.3, 0.4, 0.25)],
         ];
-        for (light, target) in lights()
-            .into_iter()
-            .flat_map(|l| targets.map(|t| (l.clone(), t)))
-        {
-            let hits = |aim: Option<BoundingSphere>, seed: u64| {
-                let m = 1_000_000;
-                let mut flux = Vec3::ZERO;
-                for i in 0..m {
-                    let mut rng = Rng::for_index(seed, Stream::CausticPhotons, i);
-                    let e = emit(&light, aim, &mut rng);
-                    let oc = e.origin - target.center;
-                    let b = oc.dot(e.direction);
-                    let c = oc.length_squared() - target.radius * target.radius;
-                    if b < 0.0 && b * b - c > 0.0 {
-                        flux += e.flux;
+        for light in lights() {
+            for aim in &aims {
+                // Flux per photon into each target, along rays that enter it.
+                let into = |aim: &[BoundingSphere], seed: u64| {
+                    let m = 1_000_000;
+                    let mut flux = vec![Vec3::ZERO; aim.len()];
+                    for i in 0..m {
+                        let mut rng = Rng::for_index(seed, Stream::CausticPhotons, i);
+                        let e = emit(&light, aim, &mut rng);
+                        for (target, flux) in aim.iter().zip(&mut flux) {
+                            let oc = e.origin - target.center;
+                            let b = oc.dot(e.direction);
+                            let c = oc.length_squared() - target.radius * target.radius;
+                            if b < 0.0 && b * b - c > 0.0 {
+                                *flux += e.flux / m as f32;
+                            }
+                        }
                     }
+                    flux
+                };
+                let aimed = into(aim, 3);
+                // Unaimed photons, counted against the same targets.
+                let plain = {
+                    let mut flux = vec![Vec3::ZERO; aim.len()];
+                    for (k, target) in aim.iter().enumerate() {
+                        let m = 1_000_000;
+                        for i in 0..m {
+                            let mut rng = Rng::for_index(4, Stream::CausticPhotons, i);
+                            let e = emit(&light, &[], &mut rng);
+                            let oc = e.origin - target.center;
+                            let b = oc.dot(e.direction);
+                            let c = oc.length_squared() - target.radius * target.radius;
+                            if b < 0.0 && b * b - c > 0.0 {
+                                flux[k] += e.flux / m as f32;
+                            }
+                        }
+                    }
+                    flux
+                };
+                for (aimed, plain) in aimed.iter().zip(&plain) {
+                    let rel = (*aimed - *plain).abs().max_element() / plain.max_element();
+                    assert!(
+                        rel < 0.03,
+                        "{light:?}, {} targets: aimed {aimed} vs plain {plain}",
+                        aim.len()
+                    );
                 }
-                flux / m as f32
-            };
-            let aimed = hits(Some(target), 3);
-            let plain = hits(None, 4);
-            let rel = (aimed - plain).abs().max_element() / plain.max_element();
-            assert!(rel < 0.03, "{light:?}: aimed {aimed} vs plain {plain}");
+            }
         }
     }
 
@@ -476,7 +486,7 @@ mod tests {
                 center: uniform_sphere(rng.next_2d()) * (0.3 + 0.02 * k as f32),
                 radius: 0.05 + 0.002 * k as f32,
             };
-            let Some((axis, cos_max)) = light_to_aim_cone(Some(aim), center, radius) else {
+            let Some((axis, cos_max)) = light_to_target_cone(&aim, center, radius) else {
                 assert!(radius + aim.radius >= (aim.center - center).length());
                 continue;
             };
@@ -499,14 +509,14 @@ mod tests {
         let Light::Sphere { center, radius, .. } = light else {
             unreachable!()
         };
-        let aim = Some(BoundingSphere {
+        let aim = [BoundingSphere {
             center: Vec3::ZERO,
             radius: 0.3,
-        });
+        }];
         let mut flux = None;
         for i in 0..10_000 {
             let mut rng = Rng::for_index(5, Stream::CausticPhotons, i);
-            let e = emit(&light, aim, &mut rng);
+            let e = emit(&light, &aim, &mut rng);
             let n = (e.origin - center) / radius;
             assert!((n.length() - 1.0).abs() < 1e-5, "origin off the sphere");
             assert!(e.direction.dot(n) >= -1e-6, "leaves inwards");

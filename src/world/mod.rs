@@ -3,10 +3,11 @@
 //! ([`lights`]). Owns the link between Embree geometry ids and scene objects; must not store
 //! photons, estimate radiance or know about images.
 
+pub mod aim;
 pub mod lights;
 
 use crate::embree::{self, EmbreeError};
-use crate::scene::{Light, Material, SceneDescription, Shape};
+use crate::scene::{Light, Material, SceneDescription, Shape, TriangleMesh};
 use glam::Vec3;
 
 /// What an Embree geometry id stands for.
@@ -43,11 +44,53 @@ pub struct Interaction {
     pub surface: Surface,
 }
 
+/// What resolving a hit on a mesh reads, laid out by triangle so that a hit reads one place
+/// (not three indices and then three vertices and three normals scattered over the mesh).
+enum TriangleNormals {
+    /// Unit geometric normal of each triangle.
+    Flat(Vec<Vec3>),
+    /// Unit geometric normal and the three vertex normals of each triangle.
+    Smooth(Vec<[Vec3; 4]>),
+}
+
+impl TriangleNormals {
+    fn new(mesh: &TriangleMesh) -> Self {
+        let geometric = |t: &[u32; 3]| {
+            let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
+            (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z)
+        };
+        match &mesh.normals {
+            None => Self::Flat(mesh.triangles.iter().map(geometric).collect()),
+            Some(n) => Self::Smooth(
+                mesh.triangles
+                    .iter()
+                    .map(|t| {
+                        let [n0, n1, n2] = t.map(|i| n[i as usize]);
+                        [geometric(t), n0, n1, n2]
+                    })
+                    .collect(),
+            ),
+        }
+    }
+}
+
 /// A bounding sphere, used to aim caustic photons at specular objects.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BoundingSphere {
     pub center: Vec3,
     pub radius: f32,
+}
+
+impl BoundingSphere {
+    /// The sphere through the corners of the box `lo`..`hi`, a little larger: a relative margin
+    /// only, since an absolute one would change the aim, and so the picture, with the scene's
+    /// units (valid shapes always have extent, so the radius is > 0).
+    fn around_box(lo: Vec3, hi: Vec3) -> Self {
+        Self {
+            center: 0.5 * (lo + hi),
+            radius: 0.5 * (hi - lo).length() * 1.001,
+        }
+    }
 }
 
 /// A closest hit as Embree reports it, with what was hit but not yet the normals: a caustic
@@ -73,11 +116,11 @@ pub struct World {
     geometry: Vec<GeometryKind>,
     /// What each geometry id shows: its material, or the light it is.
     surfaces: Vec<Surface>,
-    /// Unit geometric normal of every triangle, by geometry id (empty for spheres and lights):
-    /// one load where a hit would otherwise read three indices and three vertices.
-    face_normals: Vec<Vec<Vec3>>,
-    /// Bounds of all mirror and glass objects; `None` when the scene has none.
-    pub specular_bounds: Option<BoundingSphere>,
+    /// The normals of every triangle, by geometry id (empty for spheres and lights).
+    triangle_normals: Vec<TriangleNormals>,
+    /// Where caustic photons are aimed: a sphere around each mirror and glass object, or one
+    /// around them all past [`aim::MAX_TARGETS`]; empty when the scene has none.
+    pub caustic_targets: Vec<BoundingSphere>,
     /// Diagonal of the scene's bounding box: sets the ray epsilon and the default radii.
     pub scale: f32,
 }
@@ -88,9 +131,10 @@ impl World {
         let mut builder = device.scene_builder()?;
         let mut geometry = Vec::new();
         let mut surfaces = Vec::new();
-        let mut face_normals = Vec::new();
+        let mut triangle_normals = Vec::new();
         let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        let mut caustic_targets = Vec::new();
         for (i, shape) in description.shapes.iter().enumerate() {
             let (kind, (a, b), material) = match shape {
                 Shape::Sphere {
@@ -121,16 +165,9 @@ impl World {
             };
             geometry.push(kind);
             surfaces.push(Surface::Material(material));
-            face_normals.push(match shape {
-                Shape::Triangles(mesh) => mesh
-                    .triangles
-                    .iter()
-                    .map(|t| {
-                        let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
-                        (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z)
-                    })
-                    .collect(),
-                Shape::Sphere { .. } => Vec::new(),
+            triangle_normals.push(match shape {
+                Shape::Triangles(mesh) => TriangleNormals::new(mesh),
+                Shape::Sphere { .. } => TriangleNormals::Flat(Vec::new()),
             });
             lo = lo.min(a);
             hi = hi.max(b);
@@ -140,6 +177,13 @@ impl World {
             ) {
                 spec_lo = spec_lo.min(a);
                 spec_hi = spec_hi.max(b);
+                caustic_targets.push(match shape {
+                    Shape::Sphere { center, radius, .. } => BoundingSphere {
+                        center: *center,
+                        radius: radius * 1.001,
+                    },
+                    Shape::Triangles(_) => BoundingSphere::around_box(a, b),
+                });
             }
         }
         for (i, light) in description.lights.iter().enumerate() {
@@ -169,15 +213,12 @@ impl World {
             }
             geometry.push(GeometryKind::Emitter { light: i });
             surfaces.push(Surface::Light(i));
-            face_normals.push(Vec::new());
+            triangle_normals.push(TriangleNormals::Flat(Vec::new()));
         }
         let accel = builder.commit()?;
-        let specular_bounds = (spec_lo.x <= spec_hi.x).then(|| BoundingSphere {
-            center: 0.5 * (spec_lo + spec_hi),
-            // Relative margin only: an absolute one changes the aim, and so the picture,
-            // with the scene's units (valid shapes always have extent, so this is > 0).
-            radius: 0.5 * (spec_hi - spec_lo).length() * 1.001,
-        });
+        if caustic_targets.len() > aim::MAX_TARGETS {
+            caustic_targets = vec![BoundingSphere::around_box(spec_lo, spec_hi)];
+        }
         let scale = if lo.x <= hi.x {
             (hi - lo).length().max(1e-12)
         } else {
@@ -188,8 +229,8 @@ impl World {
             accel,
             geometry,
             surfaces,
-            face_normals,
-            specular_bounds,
+            triangle_normals,
+            caustic_targets,
             scale,
         })
     }
@@ -206,7 +247,7 @@ impl World {
 
     /// Whether any object is a mirror or glass (so caustic photons exist).
     pub fn has_specular(&self) -> bool {
-        self.specular_bounds.is_some()
+        !self.caustic_targets.is_empty()
     }
 
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {
@@ -262,22 +303,17 @@ impl World {
                 let n = (position - *center).normalize_or(Vec3::Z);
                 (n, n)
             }
-            GeometryKind::Mesh { shape } => {
-                let Shape::Triangles(mesh) = &self.description.shapes[shape] else {
-                    unreachable!("geometry kinds follow the shapes")
-                };
-                let ng = self.face_normals[hit.geometry as usize][hit.primitive as usize];
-                let ns = match &mesh.normals {
-                    Some(n) => {
-                        let [i0, i1, i2] =
-                            mesh.triangles[hit.primitive as usize].map(|i| i as usize);
-                        let s = (1.0 - hit.u - hit.v) * n[i0] + hit.u * n[i1] + hit.v * n[i2];
+            GeometryKind::Mesh { .. } => {
+                let triangle = hit.primitive as usize;
+                match &self.triangle_normals[hit.geometry as usize] {
+                    TriangleNormals::Flat(normals) => (normals[triangle], normals[triangle]),
+                    TriangleNormals::Smooth(normals) => {
+                        let [ng, n0, n1, n2] = normals[triangle];
+                        let s = (1.0 - hit.u - hit.v) * n0 + hit.u * n1 + hit.v * n2;
                         let s = s.normalize_or(ng);
-                        if s.dot(ng) < 0.0 { -s } else { s }
+                        (ng, if s.dot(ng) < 0.0 { -s } else { s })
                     }
-                    None => ng,
-                };
-                (ng, ns)
+                }
             }
             GeometryKind::Emitter { light } => {
                 let n = match &self.description.lights[light] {

@@ -1,0 +1,239 @@
+//! Where caustic photons are aimed: the bounding spheres of the mirror and glass objects, and
+//! the union of the cones towards them from a point, from which an aimed photon draws its
+//! direction. Owns those cones and their sampling density; must not know lights, trace rays or
+//! store photons.
+//!
+//! One sphere per object, not one around them all: two small spheres far apart (the Cornell
+//! box's) subtend a far smaller solid angle than the sphere that holds both, and every photon
+//! aimed into the gap between them is traced for nothing.
+
+use super::BoundingSphere;
+use crate::sampling::{ConeFrame, Rng, cone_solid_angle};
+use glam::Vec3;
+
+/// Scenes with more mirror and glass objects than this are aimed at one sphere around them all:
+/// every aimed photon tests every cone.
+pub const MAX_TARGETS: usize = 8;
+
+/// The cone from `origin` that just holds the sphere `target`: its unit axis and the cosine of
+/// its half-angle. `None` from inside the sphere.
+#[inline(always)]
+pub fn cone_towards(target: &BoundingSphere, origin: Vec3) -> Option<(Vec3, f32)> {
+    let to = target.center - origin;
+    let d2 = to.length_squared();
+    if d2 <= target.radius * target.radius {
+        return None;
+    }
+    let inverse_distance = 1.0 / d2.sqrt();
+    let sin_max = target.radius * inverse_distance;
+    Some((
+        to * inverse_distance,
+        (1.0 - sin_max * sin_max).max(0.0).sqrt(),
+    ))
+}
+
+/// Cones of directions, drawn from as one set: a cone is picked in proportion to its solid
+/// angle, a direction drawn uniformly in it, and its density is the number of cones that hold
+/// it over their total solid angle. That is uniform over the union, overlaps included.
+#[derive(Clone, Copy, Debug)]
+pub struct UnionOfCones {
+    /// Unit axis and cosine of the half-angle of each cone.
+    cones: [(Vec3, f32); MAX_TARGETS],
+    /// Solid angles summed up to and including each cone.
+    cumulative: [f32; MAX_TARGETS],
+    len: usize,
+    /// Each cone's frame, for a union drawn from many times ([`UnionOfCones::prepared`]); a
+    /// union drawn from once builds only the frame of the cone it picks.
+    frames: Option<[ConeFrame; MAX_TARGETS]>,
+}
+
+impl UnionOfCones {
+    /// The union of `cones` (unit axis, cosine of the half-angle). `None` for no cones; cones
+    /// past [`MAX_TARGETS`] are a caller's error.
+    #[inline(always)]
+    pub fn new(cones: impl IntoIterator<Item = (Vec3, f32)>) -> Option<Self> {
+        let mut union = Self {
+            cones: [(Vec3::Z, 1.0); MAX_TARGETS],
+            cumulative: [0.0; MAX_TARGETS],
+            len: 0,
+            frames: None,
+        };
+        let mut total = 0.0;
+        for cone in cones {
+            assert!(union.len < MAX_TARGETS, "more than {MAX_TARGETS} cones");
+            total += cone_solid_angle(cone.1);
+            union.cones[union.len] = cone;
+            union.cumulative[union.len] = total;
+            union.len += 1;
+        }
+        (union.len > 0).then_some(union)
+    }
+
+    /// The same union with every cone's frame built once, for drawing from it many times.
+    pub fn prepared(mut self) -> Self {
+        self.frames = Some(
+            self.cones
+                .map(|(axis, cos_max)| ConeFrame::new(axis, cos_max)),
+        );
+        self
+    }
+
+    #[inline(always)]
+    fn frame(&self, k: usize) -> ConeFrame {
+        match &self.frames {
+            Some(frames) => frames[k],
+            None => ConeFrame::new(self.cones[k].0, self.cones[k].1),
+        }
+    }
+
+    /// The cones from `origin` towards every target; `None` without targets, or when `origin`
+    /// lies inside one (no cone holds all the directions to it).
+    #[inline(always)]
+    pub fn towards(targets: &[BoundingSphere], origin: Vec3) -> Option<Self> {
+        let mut cones = [(Vec3::Z, 1.0f32); MAX_TARGETS];
+        for (cone, target) in cones.iter_mut().zip(targets) {
+            *cone = cone_towards(target, origin)?;
+        }
+        Self::new(cones.into_iter().take(targets.len()))
+    }
+
+    /// Total solid angle of the cones (their union where they do not overlap).
+    pub fn solid_angle(&self) -> f32 {
+        self.cumulative[self.len - 1]
+    }
+
+    /// A direction drawn uniformly from the union, and the reciprocal of its density (the
+    /// solid angle a photon sent that way stands for).
+    #[inline(always)]
+    pub fn sample(&self, rng: &mut Rng) -> (Vec3, f32) {
+        let total = self.solid_angle();
+        if self.len == 1 {
+            return (self.frame(0).sample(rng.next_2d()), total);
+        }
+        let pick = rng.next_f32() * total;
+        let k = (self.cumulative[..self.len].iter())
+            .position(|&c| pick < c)
+            .unwrap_or(self.len - 1);
+        let direction = self.frame(k).sample(rng.next_2d());
+        // The cone it was drawn from counts whatever rounding says of it.
+        let holding = 1
+            + (self.cones[..self.len].iter().enumerate())
+                .filter(|&(j, &(axis, cos_max))| j != k && direction.dot(axis) >= cos_max)
+                .count();
+        (direction, total / holding as f32)
+    }
+
+    /// Whether every cone lies wholly behind a surface with unit `normal`, so that a surface
+    /// there sends no light into any: n·axis < −(sin_max + δ) with δ = 1e-3, squared to spare a
+    /// square root ((sin + δ)² < sin² + 3δ), so no cone that could take light is left out.
+    #[inline(always)]
+    pub fn behind(&self, normal: Vec3) -> bool {
+        self.cones[..self.len].iter().all(|&(axis, cos_max)| {
+            let along = normal.dot(axis);
+            along < 0.0 && along * along > 1.0 - cos_max * cos_max + 3e-3
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Stream, uniform_sphere};
+
+    fn target(center: Vec3, radius: f32) -> BoundingSphere {
+        BoundingSphere { center, radius }
+    }
+
+    /// Overlapping and separate targets: the weighted average of a function over the union's
+    /// samples matches its integral over the union, found by sampling the whole sphere.
+    #[test]
+    fn union_sampling_integrates_over_the_union() {
+        let sets = [
+            vec![target(Vec3::new(0.0, 0.0, 3.0), 1.0)],
+            vec![
+                target(Vec3::new(-1.0, 0.0, 3.0), 0.8),
+                target(Vec3::new(1.5, 0.5, 2.0), 0.6),
+            ],
+            // The second overlaps the first, seen from the origin.
+            vec![
+                target(Vec3::new(0.0, 0.0, 3.0), 1.2),
+                target(Vec3::new(0.4, 0.0, 3.0), 0.9),
+                target(Vec3::new(0.0, -2.0, -1.0), 0.5),
+            ],
+        ];
+        let f = |d: Vec3| 1.0 + d.x * d.x + 0.5 * d.y;
+        for targets in sets {
+            let union = UnionOfCones::towards(&targets, Vec3::ZERO).expect("outside all");
+            let inside = |d: Vec3| {
+                targets.iter().any(|t| {
+                    let (axis, cos) = cone_towards(t, Vec3::ZERO).unwrap();
+                    d.dot(axis) >= cos
+                })
+            };
+            let n = 400_000;
+            let mut aimed = 0.0f64;
+            let mut rng = Rng::for_index(1, Stream::CausticPhotons, 0);
+            for _ in 0..n {
+                let (d, weight) = union.sample(&mut rng);
+                assert!(inside(d), "{d} outside every cone");
+                aimed += (f(d) * weight) as f64;
+            }
+            let mut plain = 0.0f64;
+            for _ in 0..n {
+                let d = uniform_sphere(rng.next_2d());
+                if inside(d) {
+                    plain += (f(d) * 4.0 * std::f32::consts::PI) as f64;
+                }
+            }
+            let (aimed, plain) = (aimed / n as f64, plain / n as f64);
+            assert!(
+                (aimed - plain).abs() < 0.02 * plain,
+                "{} targets: aimed {aimed} vs plain {plain}",
+                targets.len()
+            );
+        }
+    }
+
+    /// One cone: the sample is the cone's own, with its solid angle as the weight.
+    #[test]
+    fn a_union_of_one_cone_is_that_cone() {
+        let t = target(Vec3::new(0.3, 1.0, 2.0), 0.4);
+        let (axis, cos) = cone_towards(&t, Vec3::ZERO).unwrap();
+        let union = UnionOfCones::towards(&[t], Vec3::ZERO).unwrap();
+        let prepared = union.prepared();
+        let mut a = Rng::for_index(2, Stream::CausticPhotons, 0);
+        let (mut b, mut c) = (a.clone(), a.clone());
+        for _ in 0..1000 {
+            let (d, w) = union.sample(&mut a);
+            assert_eq!(d, ConeFrame::new(axis, cos).sample(b.next_2d()));
+            assert_eq!(w, cone_solid_angle(cos));
+            assert_eq!(prepared.sample(&mut c), (d, w));
+        }
+    }
+
+    #[test]
+    fn inside_a_target_there_is_no_union() {
+        let targets = [
+            target(Vec3::ZERO, 1.0),
+            target(Vec3::new(5.0, 0.0, 0.0), 1.0),
+        ];
+        assert!(UnionOfCones::towards(&targets, Vec3::new(0.5, 0.0, 0.0)).is_none());
+        assert!(UnionOfCones::towards(&[], Vec3::ZERO).is_none());
+        assert!(UnionOfCones::towards(&targets, Vec3::new(2.5, 3.0, 0.0)).is_some());
+    }
+
+    /// A surface facing away from every target is behind them all; one facing any is not.
+    #[test]
+    fn behind_means_behind_every_cone() {
+        let targets = [
+            target(Vec3::new(0.0, 0.0, 3.0), 0.5),
+            target(Vec3::new(3.0, 0.0, 0.0), 0.5),
+        ];
+        let union = UnionOfCones::towards(&targets, Vec3::ZERO).unwrap();
+        assert!(union.behind(Vec3::new(-1.0, 0.0, -1.0).normalize()));
+        assert!(!union.behind(Vec3::Z));
+        assert!(!union.behind(Vec3::X));
+        // Edge-on to the target along +x: not wholly behind it.
+        assert!(!union.behind(-Vec3::Z));
+    }
+}
