@@ -116,13 +116,13 @@ struct CaseFigures {
 fn bench_case(c: &mut Criterion, case: &Case, all_figures: &mut Vec<CaseFigures>) {
     let world = world(case.scene);
     let first = pool(1).install(|| trace(&world, case));
-    assert_eq!(first.photons.len(), case.target, "{}", case.name);
+    assert_eq!(first.len(), case.target, "{}", case.name);
     let emission = emission_rays(&world, case.kind, SEED, 0..first.rays);
     assert!(!emission.is_empty(), "{}: no emission rays", case.name);
     let replay = path_rays(&world, case.kind, SEED, 0..first.counts.emitted);
     let mut figures = CaseFigures {
         seconds: Default::default(),
-        stored: first.photons.len() as u64,
+        stored: first.len() as u64,
         rays: first.rays,
         emission_rays: emission.len() as u64,
         replay_rays: replay.len() as u64,

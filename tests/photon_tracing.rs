@@ -6,7 +6,7 @@
 mod support;
 
 use dpm::estimate::{KnnEstimate, Query, RadialKernel, RadianceEstimate, Scratch};
-use dpm::photon::tracer::{MapKind, TraceCounts, trace_map};
+use dpm::photon::tracer::{MapKind, TraceCounts, trace_map, trace_photons};
 use dpm::photon::{Neighbours, PhotonMap};
 use dpm::render::PinholeCamera;
 use dpm::render::pipeline;
@@ -357,6 +357,24 @@ fn maps_are_identical_on_one_and_two_threads() {
             trace_map(&world, kind, target, 10, &ProgressBar::hidden())
         });
         assert!(one.photons().ne(other.photons()), "{kind:?}: seed ignored");
+    }
+}
+
+/// The map the tracer builds, encoding each photon's power as the map takes it in, is the map
+/// of the stored photons built the plain way, slot for slot.
+#[test]
+fn the_traced_map_is_the_map_of_the_traced_photons() {
+    let world = world(&cornell_point_light(8, 8));
+    for kind in [MapKind::Caustic, GLOBAL_ALL] {
+        let traced = trace_photons(&world, kind, 30_000, 4, &ProgressBar::hidden());
+        assert_eq!(traced.len(), 30_000);
+        let photons = traced.photons();
+        let emitted = traced.counts.emitted;
+        let plain = PhotonMap::build(photons, emitted);
+        let map = traced.into_map();
+        assert_eq!(map.len(), plain.len());
+        assert!(map.photons().eq(plain.photons()), "{kind:?}: maps differ");
+        assert_eq!(map.emitted, plain.emitted);
     }
 }
 

@@ -9,6 +9,7 @@
 
 use super::{KdTree, Photon, PhotonAttributes};
 use glam::Vec3;
+use rayon::prelude::*;
 
 #[derive(Clone, Debug, Default)]
 pub struct PhotonMap {
@@ -23,11 +24,23 @@ pub struct PhotonMap {
 impl PhotonMap {
     pub fn build(photons: Vec<Photon>, emitted: u64) -> Self {
         let positions: Vec<Vec3> = photons.iter().map(Photon::position).collect();
+        Self::from_sources(positions, |i| photons[i].attributes(), emitted)
+    }
+
+    /// The map of the photons at `positions`, the attributes of photon `i` given by
+    /// `attributes_of(i)`, asked for in the tree's order.
+    pub fn from_sources(
+        positions: Vec<Vec3>,
+        attributes_of: impl Fn(usize) -> PhotonAttributes + Sync,
+        emitted: u64,
+    ) -> Self {
         let tree = KdTree::build(&positions);
         drop(positions);
-        let attributes = (0..tree.len())
-            .map(|s| photons[tree.source_index(s) as usize].attributes())
-            .collect();
+        let mut attributes = Vec::new();
+        (0..tree.len())
+            .into_par_iter()
+            .map(|s| attributes_of(tree.source_index(s) as usize))
+            .collect_into_vec(&mut attributes);
         Self {
             tree,
             attributes,

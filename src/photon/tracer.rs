@@ -176,19 +176,81 @@ pub fn trace_map(
         // Not worth building: the caller discards it.
         return (PhotonMap::default(), traced.counts);
     }
-    let map = PhotonMap::build(traced.photons, traced.counts.emitted);
-    (map, traced.counts)
+    let counts = traced.counts;
+    (traced.into_map(), counts)
 }
 
-/// The photons of one pass, before any kd-tree is built.
+/// The photons of one pass, before any kd-tree is built: in path index order, as traced, with
+/// the flux not yet divided by the number of paths emitted. Their power is encoded where the map
+/// orders them ([`TracedPhotons::into_map`]): one pass over the photons, not two.
 pub struct TracedPhotons {
-    /// In path index order, flux already divided by the number of paths emitted.
-    pub photons: Vec<Photon>,
+    /// Runs of consecutive paths' photons, in order.
+    chunks: Vec<Vec<TracedPhoton>>,
+    /// Photons before each chunk.
+    chunk_starts: Vec<usize>,
+    len: usize,
     pub counts: TraceCounts,
     /// Closest-hit rays cast, counting the paths traced past the target too.
     pub rays: u64,
-    /// An interruption was requested: `photons` is empty and must be discarded.
+    /// An interruption was requested: there are no photons, and the pass must be discarded.
     pub interrupted: bool,
+}
+
+impl TracedPhotons {
+    fn new(chunks: Vec<Vec<TracedPhoton>>, counts: TraceCounts, rays: u64) -> Self {
+        let mut chunk_starts = Vec::with_capacity(chunks.len());
+        let mut len = 0;
+        for chunk in &chunks {
+            chunk_starts.push(len);
+            len += chunk.len();
+        }
+        Self {
+            chunks,
+            chunk_starts,
+            len,
+            counts,
+            rays,
+            interrupted: false,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Photon `i` (in path order) as stored: its flux divided by the number of paths emitted.
+    fn photon(&self, i: usize) -> Photon {
+        let c = self.chunk_starts.partition_point(|&start| start <= i) - 1;
+        let p = &self.chunks[c][i - self.chunk_starts[c]];
+        Photon::with_directions(p.position, p.flux * self.flux_scale(), p.directions)
+    }
+
+    fn flux_scale(&self) -> f32 {
+        1.0 / self.counts.emitted.max(1) as f32
+    }
+
+    /// The stored photons, in path order.
+    pub fn photons(&self) -> Vec<Photon> {
+        let scale = self.flux_scale();
+        (self.chunks.iter().flatten())
+            .map(|p| Photon::with_directions(p.position, p.flux * scale, p.directions))
+            .collect()
+    }
+
+    /// The photon map of these photons, each photon's power encoded as the map takes it in:
+    /// the same map as [`PhotonMap::build`] of [`TracedPhotons::photons`].
+    pub fn into_map(self) -> PhotonMap {
+        let positions: Vec<Vec3> = (self.chunks.iter().flatten()).map(|p| p.position).collect();
+        PhotonMap::from_sources(
+            positions,
+            |i| self.photon(i).attributes(),
+            self.counts.emitted,
+        )
+    }
 }
 
 /// What one rayon task traced: a run of consecutive paths.
@@ -224,12 +286,7 @@ pub fn trace_photons(
 ) -> TracedPhotons {
     let max_paths = (target as u64).saturating_mul(1000).max(1_000_000);
     let Some(emitter) = Emitter::new(world, kind, seed) else {
-        return TracedPhotons {
-            photons: Vec::new(),
-            counts: TraceCounts::default(),
-            rays: 0,
-            interrupted: false,
-        };
+        return TracedPhotons::new(Vec::new(), TraceCounts::default(), 0);
     };
     let mut kept: Vec<Vec<TracedPhoton>> = Vec::new();
     let mut stored = 0usize;
@@ -279,23 +336,15 @@ pub fn trace_photons(
         batch = (remaining * 1.02).clamp(16_384.0, 4_000_000.0) as u64;
     }
     if crate::interrupt::requested() {
-        return TracedPhotons {
-            photons: Vec::new(),
-            counts: TraceCounts { emitted, stored: 0 },
-            rays,
-            interrupted: true,
-        };
+        let mut traced = TracedPhotons::new(Vec::new(), TraceCounts { emitted, stored: 0 }, rays);
+        traced.interrupted = true;
+        return traced;
     }
-    let photons = to_records(&kept, stored, 1.0 / emitted.max(1) as f32);
-    TracedPhotons {
-        photons,
-        counts: TraceCounts {
-            emitted,
-            stored: stored as u64,
-        },
-        rays,
-        interrupted: false,
-    }
+    let counts = TraceCounts {
+        emitted,
+        stored: stored as u64,
+    };
+    TracedPhotons::new(kept, counts, rays)
 }
 
 /// Paths `paths`, one after another on this thread.
@@ -329,24 +378,6 @@ fn trace_chunk(
         }
     }
     chunk
-}
-
-/// The stored records of the kept chunks, in order, each flux multiplied by `scale`.
-fn to_records(kept: &[Vec<TracedPhoton>], stored: usize, scale: f32) -> Vec<Photon> {
-    let mut photons = vec![Photon::default(); stored];
-    let mut rest = photons.as_mut_slice();
-    let mut pieces = Vec::with_capacity(kept.len());
-    for chunk in kept {
-        let (piece, tail) = rest.split_at_mut(chunk.len());
-        pieces.push((chunk.as_slice(), piece));
-        rest = tail;
-    }
-    pieces.into_par_iter().for_each(|(traced, records)| {
-        for (p, record) in traced.iter().zip(records) {
-            *record = Photon::with_directions(p.position, p.flux * scale, p.directions);
-        }
-    });
-    photons
 }
 
 /// Where a path reports each ray it casts: nowhere when tracing, a list for benchmarks.
