@@ -5,15 +5,95 @@
 //!
 //! One sphere per object, not one around them all: two small spheres far apart (the Cornell
 //! box's) subtend a far smaller solid angle than the sphere that holds both, and every photon
-//! aimed into the gap between them is traced for nothing.
+//! aimed into the gap between them is traced for nothing. For the same reason a mesh is split
+//! into up to [`MAX_TARGETS`] clusters of triangles, each in its own sphere: the torus knot's
+//! tube fills little of the one sphere around it.
 
 use super::BoundingSphere;
 use crate::sampling::{ConeFrame, Rng, cone_solid_angle};
+use crate::scene::{Shape, TriangleMesh};
 use glam::Vec3;
 
 /// Scenes with more mirror and glass objects than this are aimed at one sphere around them all:
 /// every aimed photon tests every cone.
 pub const MAX_TARGETS: usize = 8;
+
+/// The spheres to aim caustic photons at, for at most [`MAX_TARGETS`] mirror and glass shapes:
+/// a sphere is its own target, a mesh is split into clusters sharing what is left of the
+/// budget (a power of two each).
+pub fn targets(specular: &[&Shape]) -> Vec<BoundingSphere> {
+    assert!(specular.len() <= MAX_TARGETS, "too many shapes to aim at");
+    let meshes = specular
+        .iter()
+        .filter(|s| matches!(s, Shape::Triangles(_)))
+        .count();
+    let spare = MAX_TARGETS - (specular.len() - meshes);
+    // Clusters per mesh: the largest power of two that the meshes can all have.
+    let clusters = spare.checked_div(meshes).map_or(1, |each| 1 << each.max(1).ilog2());
+    let mut targets = Vec::new();
+    for shape in specular {
+        match shape {
+            Shape::Sphere { center, radius, .. } => targets.push(BoundingSphere {
+                center: *center,
+                radius: radius * 1.001,
+            }),
+            Shape::Triangles(mesh) => {
+                let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+                split_mesh(mesh, all, clusters, &mut targets);
+            }
+        }
+    }
+    targets
+}
+
+/// Splits `triangles` of `mesh` at the median of their centroids along the widest axis until
+/// there are `clusters` groups, and appends a sphere around each.
+fn split_mesh(
+    mesh: &TriangleMesh,
+    mut triangles: Vec<u32>,
+    clusters: usize,
+    out: &mut Vec<BoundingSphere>,
+) {
+    let vertices = |t: u32| mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
+    if clusters <= 1 || triangles.len() < 2 {
+        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        for &t in &triangles {
+            for p in vertices(t) {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        let center = 0.5 * (lo + hi);
+        let reach = (triangles.iter())
+            .flat_map(|&t| vertices(t))
+            .map(|p| p.distance(center))
+            .fold(0.0f32, f32::max);
+        // Relative margin, as for boxes; a lone degenerate cluster still gets a radius.
+        let box_sphere = BoundingSphere::around_box(lo, hi);
+        out.push(BoundingSphere {
+            center,
+            radius: (reach * 1.001).max(box_sphere.radius * 1e-3),
+        });
+        return;
+    }
+    let centroid = |t: u32| {
+        let [a, b, c] = vertices(t);
+        (a + b + c) / 3.0
+    };
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for &t in &triangles {
+        lo = lo.min(centroid(t));
+        hi = hi.max(centroid(t));
+    }
+    let axis = (hi - lo).max_position();
+    let half = triangles.len() / 2;
+    triangles.select_nth_unstable_by(half, |&a, &b| {
+        centroid(a)[axis].total_cmp(&centroid(b)[axis])
+    });
+    let upper = triangles.split_off(half);
+    split_mesh(mesh, triangles, clusters / 2, out);
+    split_mesh(mesh, upper, clusters / 2, out);
+}
 
 /// The cone from `origin` that just holds the sphere `target`: its unit axis and the cosine of
 /// its half-angle. `None` from inside the sphere.
@@ -192,6 +272,63 @@ mod tests {
                 targets.len()
             );
         }
+    }
+
+    /// Every vertex of a mesh lies in one of its clusters' spheres, and the clusters are as many
+    /// as the budget allows.
+    #[test]
+    fn mesh_clusters_hold_every_vertex() {
+        let mut rng = Rng::for_index(3, Stream::CausticPhotons, 0);
+        // A wiggly strip of triangles along a helix, like a knot's tube.
+        let positions: Vec<Vec3> = (0..600)
+            .map(|i| {
+                let t = i as f32 * 0.05;
+                Vec3::new(t.cos(), t.sin(), 0.1 * t) + 0.05 * uniform_sphere(rng.next_2d())
+            })
+            .collect();
+        let triangles: Vec<[u32; 3]> = (0..598).map(|i| [i, i + 1, i + 2]).collect();
+        let mesh = Shape::Triangles(TriangleMesh {
+            positions: positions.clone(),
+            normals: None,
+            triangles: triangles.clone(),
+            material: 0,
+        });
+        let ball = Shape::Sphere {
+            center: Vec3::new(5.0, 0.0, 0.0),
+            radius: 0.5,
+            material: 0,
+        };
+        for (shapes, expected) in [
+            (vec![&mesh], MAX_TARGETS),
+            (vec![&mesh, &ball], 1 + 4),
+            (vec![&ball, &mesh, &mesh], 1 + 2 * 2),
+        ] {
+            let spheres = targets(&shapes);
+            assert_eq!(spheres.len(), expected);
+            let mesh_spheres = if matches!(shapes[0], Shape::Sphere { .. }) {
+                &spheres[1..]
+            } else {
+                &spheres[..]
+            };
+            for t in &triangles {
+                // The whole triangle lies in one sphere: its three corners do.
+                let held = mesh_spheres.iter().any(|s| {
+                    t.iter()
+                        .all(|&i| positions[i as usize].distance(s.center) <= s.radius)
+                });
+                assert!(held, "triangle {t:?} is in no sphere");
+            }
+        }
+        // Clusters are smaller than one sphere around the whole mesh.
+        let one = BoundingSphere::around_box(
+            positions.iter().fold(Vec3::MAX, |a, &p| a.min(p)),
+            positions.iter().fold(Vec3::MIN, |a, &p| a.max(p)),
+        );
+        assert!(
+            targets(&[&mesh])
+                .iter()
+                .all(|s| s.radius < 0.5 * one.radius)
+        );
     }
 
     /// One cone: the sample is the cone's own, with its solid angle as the weight.

@@ -85,7 +85,7 @@ impl BoundingSphere {
     /// The sphere through the corners of the box `lo`..`hi`, a little larger: a relative margin
     /// only, since an absolute one would change the aim, and so the picture, with the scene's
     /// units (valid shapes always have extent, so the radius is > 0).
-    fn around_box(lo: Vec3, hi: Vec3) -> Self {
+    pub(crate) fn around_box(lo: Vec3, hi: Vec3) -> Self {
         Self {
             center: 0.5 * (lo + hi),
             radius: 0.5 * (hi - lo).length() * 1.001,
@@ -134,7 +134,7 @@ impl World {
         let mut triangle_normals = Vec::new();
         let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-        let mut caustic_targets = Vec::new();
+        let mut specular_shapes = Vec::new();
         for (i, shape) in description.shapes.iter().enumerate() {
             let (kind, (a, b), material) = match shape {
                 Shape::Sphere {
@@ -177,13 +177,7 @@ impl World {
             ) {
                 spec_lo = spec_lo.min(a);
                 spec_hi = spec_hi.max(b);
-                caustic_targets.push(match shape {
-                    Shape::Sphere { center, radius, .. } => BoundingSphere {
-                        center: *center,
-                        radius: radius * 1.001,
-                    },
-                    Shape::Triangles(_) => BoundingSphere::around_box(a, b),
-                });
+                specular_shapes.push(shape);
             }
         }
         for (i, light) in description.lights.iter().enumerate() {
@@ -216,9 +210,11 @@ impl World {
             triangle_normals.push(TriangleNormals::Flat(Vec::new()));
         }
         let accel = builder.commit()?;
-        if caustic_targets.len() > aim::MAX_TARGETS {
-            caustic_targets = vec![BoundingSphere::around_box(spec_lo, spec_hi)];
-        }
+        let caustic_targets = if specular_shapes.len() > aim::MAX_TARGETS {
+            vec![BoundingSphere::around_box(spec_lo, spec_hi)]
+        } else {
+            aim::targets(&specular_shapes)
+        };
         let scale = if lo.x <= hi.x {
             (hi - lo).length().max(1e-12)
         } else {
