@@ -28,15 +28,74 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     if sin2_t >= 1.0 {
         return 1.0;
     }
-    let cos_t = (1.0 - sin2_t).sqrt();
+    fresnel_with_cos_t(cos_i, (1.0 - sin2_t).sqrt(), eta)
+}
+
+#[inline(always)]
+fn fresnel_with_cos_t(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
     let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     0.5 * (r_s * r_s + r_p * r_p)
 }
 
+/// Where a photon arriving along unit `d` at a smooth dielectric with unit normal `n` (facing
+/// the incoming side, `eta` = n_incident / n_transmitted) goes: reflected with the Fresnel
+/// probability (`u` uniform in [0, 1) decides), refracted otherwise; reflected on total
+/// internal reflection. The same as choosing between [`reflect`] and [`refract`] by
+/// [`fresnel_dielectric`], with the transmitted cosine computed once and the refracted
+/// direction left unnormalised: it is unit by construction, to a few ulps.
+#[inline]
+pub fn scatter_dielectric(d: Vec3, n: Vec3, eta: f32, u: f32) -> Vec3 {
+    let cos_i = (-d.dot(n)).clamp(0.0, 1.0);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return reflect(d, n);
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    if u < fresnel_with_cos_t(cos_i, cos_t, eta) {
+        reflect(d, n)
+    } else {
+        eta * d + (eta * cos_i - cos_t) * n
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Scattering in one step picks the same branch as Fresnel then refraction, and its
+    /// refracted direction is the normalised one to within 1e-6.
+    #[test]
+    fn scatter_dielectric_matches_fresnel_then_refract() {
+        let mut s = 11u32;
+        let mut r = || {
+            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+            (s >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut refracted = 0;
+        for _ in 0..100_000 {
+            let n = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5).normalize();
+            let mut d = Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5).normalize();
+            if d.dot(n) > 0.0 {
+                d = -d;
+            }
+            let eta = if r() < 0.5 { 1.0 / 1.5 } else { 1.5 };
+            let u = r();
+            let cos_i = -d.dot(n);
+            let want = if u < fresnel_dielectric(cos_i, eta) {
+                reflect(d, n)
+            } else {
+                refracted += 1;
+                refract(d, n, eta).unwrap_or_else(|| reflect(d, n))
+            };
+            let got = scatter_dielectric(d, n, eta, u);
+            assert!(
+                (got - want).length() < 1e-6,
+                "{d} {n} {eta}: {got} vs {want}"
+            );
+        }
+        assert!(refracted > 50_000, "only {refracted} refracted");
+    }
 
     #[test]
     fn normal_incidence_reflectance_matches_the_closed_form() {

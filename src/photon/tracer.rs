@@ -8,7 +8,7 @@
 //! index order, so the maps are identical whatever the thread count.
 
 use super::{EncodedDirections, Photon, PhotonMap};
-use crate::optics::{fresnel_dielectric, reflect, refract};
+use crate::optics::{reflect, scatter_dielectric};
 use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
 use crate::scene::Material;
 use crate::world::lights::{self, Emission, LightEmitter};
@@ -548,12 +548,7 @@ fn advance(
         Material::Glass { ior } => {
             path.specular_seen = true;
             let eta = if entering { 1.0 / ior } else { *ior };
-            let cos_i = -d.dot(ns);
-            if path.rng.next_f32() < fresnel_dielectric(cos_i, eta) {
-                reflect(d, ns)
-            } else {
-                refract(d, ns, eta).unwrap_or_else(|| reflect(d, ns))
-            }
+            scatter_dielectric(d, ns, eta, path.rng.next_f32())
         }
     };
     path.bounces += 1;

@@ -4,7 +4,7 @@
 //! map shown directly). Owns shading; must not build maps or write images.
 
 use crate::estimate::{Query, RadianceEstimate, Scratch};
-use crate::optics::{fresnel_dielectric, reflect, refract};
+use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
 use crate::sampling::{Rng, cosine_hemisphere};
 use crate::scene::Material;
@@ -197,11 +197,7 @@ impl Integrator<'_> {
                     } else {
                         *ior
                     };
-                    if rng.next_f32() < fresnel_dielectric(-d.dot(ns), eta) {
-                        reflect(d, ns)
-                    } else {
-                        refract(d, ns, eta).unwrap_or_else(|| reflect(d, ns))
-                    }
+                    scatter_dielectric(d, ns, eta, rng.next_f32())
                 }
             };
             o = self.spawn(hit.position, ng, next);

@@ -29,7 +29,9 @@ pub fn targets(specular: &[&Shape]) -> Vec<BoundingSphere> {
         .count();
     let spare = MAX_TARGETS - (specular.len() - meshes);
     // Clusters per mesh: the largest power of two that the meshes can all have.
-    let clusters = spare.checked_div(meshes).map_or(1, |each| 1 << each.max(1).ilog2());
+    let clusters = spare
+        .checked_div(meshes)
+        .map_or(1, |each| 1 << each.max(1).ilog2());
     let mut targets = Vec::new();
     for shape in specular {
         match shape {
@@ -122,59 +124,67 @@ pub struct UnionOfCones {
     /// Solid angles summed up to and including each cone.
     cumulative: [f32; MAX_TARGETS],
     len: usize,
-    /// Each cone's frame, for a union drawn from many times ([`UnionOfCones::prepared`]); a
-    /// union drawn from once builds only the frame of the cone it picks.
-    frames: Option<[ConeFrame; MAX_TARGETS]>,
+}
+
+/// A union of cones drawn from many times (a light's cones towards fixed targets), with every
+/// cone's frame built once; a union drawn from once builds only the frame of the cone it picks.
+#[derive(Clone, Copy, Debug)]
+pub struct PreparedUnion {
+    union: UnionOfCones,
+    frames: [ConeFrame; MAX_TARGETS],
 }
 
 impl UnionOfCones {
-    /// The union of `cones` (unit axis, cosine of the half-angle). `None` for no cones; cones
-    /// past [`MAX_TARGETS`] are a caller's error.
-    #[inline(always)]
-    pub fn new(cones: impl IntoIterator<Item = (Vec3, f32)>) -> Option<Self> {
-        let mut union = Self {
+    fn empty() -> Self {
+        Self {
             cones: [(Vec3::Z, 1.0); MAX_TARGETS],
             cumulative: [0.0; MAX_TARGETS],
             len: 0,
-            frames: None,
-        };
-        let mut total = 0.0;
-        for cone in cones {
-            assert!(union.len < MAX_TARGETS, "more than {MAX_TARGETS} cones");
-            total += cone_solid_angle(cone.1);
-            union.cones[union.len] = cone;
-            union.cumulative[union.len] = total;
-            union.len += 1;
         }
-        (union.len > 0).then_some(union)
-    }
-
-    /// The same union with every cone's frame built once, for drawing from it many times.
-    pub fn prepared(mut self) -> Self {
-        self.frames = Some(
-            self.cones
-                .map(|(axis, cos_max)| ConeFrame::new(axis, cos_max)),
-        );
-        self
     }
 
     #[inline(always)]
-    fn frame(&self, k: usize) -> ConeFrame {
-        match &self.frames {
-            Some(frames) => frames[k],
-            None => ConeFrame::new(self.cones[k].0, self.cones[k].1),
+    fn push(&mut self, cone: (Vec3, f32)) {
+        assert!(self.len < MAX_TARGETS, "more than {MAX_TARGETS} cones");
+        let before = if self.len == 0 {
+            0.0
+        } else {
+            self.cumulative[self.len - 1]
+        };
+        self.cones[self.len] = cone;
+        self.cumulative[self.len] = before + cone_solid_angle(cone.1);
+        self.len += 1;
+    }
+
+    /// The union of `cones` (unit axis, cosine of the half-angle). `None` for no cones; cones
+    /// past [`MAX_TARGETS`] are a caller's error.
+    pub fn new(cones: impl IntoIterator<Item = (Vec3, f32)>) -> Option<Self> {
+        let mut union = Self::empty();
+        for cone in cones {
+            union.push(cone);
         }
+        (union.len > 0).then_some(union)
     }
 
     /// The cones from `origin` towards every target; `None` without targets, or when `origin`
     /// lies inside one (no cone holds all the directions to it).
     #[inline(always)]
     pub fn towards(targets: &[BoundingSphere], origin: Vec3) -> Option<Self> {
-        let mut cones = [(Vec3::Z, 1.0f32); MAX_TARGETS];
-        for (cone, target) in cones.iter_mut().zip(targets) {
-            *cone = cone_towards(target, origin)?;
+        let mut union = Self::empty();
+        for target in targets {
+            union.push(cone_towards(target, origin)?);
         }
-        Self::new(cones.into_iter().take(targets.len()))
+        (union.len > 0).then_some(union)
+    }
+
+    /// The same union with every cone's frame built once, for drawing from it many times.
+    pub fn prepared(self) -> PreparedUnion {
+        PreparedUnion {
+            union: self,
+            frames: self
+                .cones
+                .map(|(axis, cos_max)| ConeFrame::new(axis, cos_max)),
+        }
     }
 
     /// Total solid angle of the cones (their union where they do not overlap).
@@ -186,15 +196,20 @@ impl UnionOfCones {
     /// solid angle a photon sent that way stands for).
     #[inline(always)]
     pub fn sample(&self, rng: &mut Rng) -> (Vec3, f32) {
+        self.sample_with(rng, |k| ConeFrame::new(self.cones[k].0, self.cones[k].1))
+    }
+
+    #[inline(always)]
+    fn sample_with(&self, rng: &mut Rng, frame: impl Fn(usize) -> ConeFrame) -> (Vec3, f32) {
         let total = self.solid_angle();
         if self.len == 1 {
-            return (self.frame(0).sample(rng.next_2d()), total);
+            return (frame(0).sample(rng.next_2d()), total);
         }
         let pick = rng.next_f32() * total;
         let k = (self.cumulative[..self.len].iter())
             .position(|&c| pick < c)
             .unwrap_or(self.len - 1);
-        let direction = self.frame(k).sample(rng.next_2d());
+        let direction = frame(k).sample(rng.next_2d());
         // The cone it was drawn from counts whatever rounding says of it.
         let holding = 1
             + (self.cones[..self.len].iter().enumerate())
@@ -212,6 +227,14 @@ impl UnionOfCones {
             let along = normal.dot(axis);
             along < 0.0 && along * along > 1.0 - cos_max * cos_max + 3e-3
         })
+    }
+}
+
+impl PreparedUnion {
+    /// As [`UnionOfCones::sample`], on the same numbers, with the frames already built.
+    #[inline(always)]
+    pub fn sample(&self, rng: &mut Rng) -> (Vec3, f32) {
+        self.union.sample_with(rng, |k| self.frames[k])
     }
 }
 

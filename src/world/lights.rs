@@ -3,7 +3,7 @@
 //! radiance of a visible emitter. Owns the sampling densities; must not trace rays.
 
 use super::BoundingSphere;
-use super::aim::UnionOfCones;
+use super::aim::{PreparedUnion, UnionOfCones};
 use crate::sampling::{
     Rng, basis, cone_solid_angle, cosine_hemisphere, uniform_cone, uniform_disc, uniform_sphere,
 };
@@ -106,7 +106,7 @@ enum Source {
     /// that of the whole sphere of directions, Φ / 4π per steradian when aimed.
     Point {
         position: Vec3,
-        cones: Option<UnionOfCones>,
+        cones: Option<PreparedUnion>,
         flux: Vec3,
     },
     /// Aimed: a direction from the cones that hold the targets (see [`light_to_target_cone`]),
@@ -117,7 +117,7 @@ enum Source {
     Sphere {
         center: Vec3,
         radius: f32,
-        toward_targets: Option<UnionOfCones>,
+        toward_targets: Option<PreparedUnion>,
         power: Vec3,
     },
     Quad {
