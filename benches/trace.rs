@@ -1,8 +1,9 @@
 //! Photon tracing against Embree alone, on the shipped scenes: the caustic map of
 //! `scenes/torus-knot.toml`, and the caustic and global maps of `scenes/cornell-box.toml`.
 //!
-//! The tracer side times [`trace_photons`] (every path until the target is stored, and the
-//! photon records; not the kd-tree). Two Embree sides time closest-hit queries only:
+//! The tracer side times [`trace_photons`] (every path until the target is stored, the photons
+//! kept as traced; not the kd-tree, nor the power encoding the map build does as it orders the
+//! photons). Two Embree sides time closest-hit queries only:
 //! - "embree emission": the first rays of the same paths (the same lights, the same aim at the
 //!   specular objects, the same random numbers), as many rays as the tracer casts;
 //! - "embree replay": exactly the rays the tracer casts, bounces included, replayed in order.
