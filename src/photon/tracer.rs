@@ -7,7 +7,7 @@
 //! Determinism: path `i` draws only from `Rng::for_index(seed, stream, i)` and paths are kept in
 //! index order, so the maps are identical whatever the thread count.
 
-use super::{EncodedDirections, Photon, PhotonMap};
+use super::{EncodedDirections, Photon, PhotonAttributes, PhotonMap};
 use crate::optics::{reflect, scatter_dielectric};
 use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
 use crate::scene::Material;
@@ -186,8 +186,6 @@ pub fn trace_map(
 pub struct TracedPhotons {
     /// Runs of consecutive paths' photons, in order.
     chunks: Vec<Vec<TracedPhoton>>,
-    /// Photons before each chunk.
-    chunk_starts: Vec<usize>,
     len: usize,
     pub counts: TraceCounts,
     /// Closest-hit rays cast, counting the paths traced past the target too.
@@ -198,16 +196,9 @@ pub struct TracedPhotons {
 
 impl TracedPhotons {
     fn new(chunks: Vec<Vec<TracedPhoton>>, counts: TraceCounts, rays: u64) -> Self {
-        let mut chunk_starts = Vec::with_capacity(chunks.len());
-        let mut len = 0;
-        for chunk in &chunks {
-            chunk_starts.push(len);
-            len += chunk.len();
-        }
         Self {
+            len: chunks.iter().map(Vec::len).sum(),
             chunks,
-            chunk_starts,
-            len,
             counts,
             rays,
             interrupted: false,
@@ -222,13 +213,6 @@ impl TracedPhotons {
         self.len == 0
     }
 
-    /// Photon `i` (in path order) as stored: its flux divided by the number of paths emitted.
-    fn photon(&self, i: usize) -> Photon {
-        let c = self.chunk_starts.partition_point(|&start| start <= i) - 1;
-        let p = &self.chunks[c][i - self.chunk_starts[c]];
-        Photon::with_directions(p.position, p.flux * self.flux_scale(), p.directions)
-    }
-
     fn flux_scale(&self) -> f32 {
         1.0 / self.counts.emitted.max(1) as f32
     }
@@ -241,15 +225,34 @@ impl TracedPhotons {
             .collect()
     }
 
-    /// The photon map of these photons, each photon's power encoded as the map takes it in:
-    /// the same map as [`PhotonMap::build`] of [`TracedPhotons::photons`].
+    /// The photon map of these photons: the same map as [`PhotonMap::build`] of
+    /// [`TracedPhotons::photons`]. Each chunk is encoded (in parallel) into positions and
+    /// attributes and freed before the kd-tree is built, so the 32-byte traced photons are gone
+    /// by the time the tree and the map's attributes take their memory.
     pub fn into_map(self) -> PhotonMap {
-        let positions: Vec<Vec3> = (self.chunks.iter().flatten()).map(|p| p.position).collect();
-        PhotonMap::from_sources(
-            positions,
-            |i| self.photon(i).attributes(),
-            self.counts.emitted,
-        )
+        let scale = self.flux_scale();
+        let emitted = self.counts.emitted;
+        let encoded: Vec<(Vec<Vec3>, Vec<PhotonAttributes>)> = (self.chunks.into_par_iter())
+            .map(|chunk| {
+                let encoded = chunk
+                    .iter()
+                    .map(|p| {
+                        let photon =
+                            Photon::with_directions(p.position, p.flux * scale, p.directions);
+                        (p.position, photon.attributes())
+                    })
+                    .unzip();
+                drop(chunk);
+                encoded
+            })
+            .collect();
+        let mut positions = Vec::with_capacity(self.len);
+        let mut attributes = Vec::with_capacity(self.len);
+        for (p, a) in encoded {
+            positions.extend_from_slice(&p);
+            attributes.extend_from_slice(&a);
+        }
+        PhotonMap::from_sources(positions, |i| attributes[i], emitted)
     }
 }
 
