@@ -49,6 +49,13 @@ struct TracedPhoton {
     path_in_chunk: u32,
 }
 
+impl TracedPhoton {
+    /// The stored photon, its flux multiplied by `scale` (one over the paths emitted).
+    fn record(&self, scale: f32) -> Photon {
+        Photon::with_directions(self.position, self.flux * scale, self.directions)
+    }
+}
+
 /// Splits photon paths among the lights in proportion to their power.
 struct LightChooser {
     cdf: Vec<f32>,
@@ -221,7 +228,7 @@ impl TracedPhotons {
     pub fn photons(&self) -> Vec<Photon> {
         let scale = self.flux_scale();
         (self.chunks.iter().flatten())
-            .map(|p| Photon::with_directions(p.position, p.flux * scale, p.directions))
+            .map(|p| p.record(scale))
             .collect()
     }
 
@@ -236,11 +243,7 @@ impl TracedPhotons {
             .map(|chunk| {
                 let encoded = chunk
                     .iter()
-                    .map(|p| {
-                        let photon =
-                            Photon::with_directions(p.position, p.flux * scale, p.directions);
-                        (p.position, photon.attributes())
-                    })
+                    .map(|p| (p.position, p.record(scale).attributes()))
                     .unzip();
                 drop(chunk);
                 encoded
@@ -264,9 +267,6 @@ struct Chunk {
     end: u64,
     rays: u64,
 }
-
-/// Paths whose starts are drawn together before any of them is traced.
-const EMISSION_BATCH: u64 = 32;
 
 /// Paths per rayon task: many tasks per thread so that none waits long at the end of a batch,
 /// each long enough (a few hundred microseconds) that scheduling costs nothing; 64 per thread
@@ -368,17 +368,10 @@ fn trace_chunk(
     if crate::interrupt::requested() {
         return chunk;
     }
-    let mut starts = Vec::with_capacity(EMISSION_BATCH as usize);
-    for batch_start in paths.clone().step_by(EMISSION_BATCH as usize) {
-        // Emission first, for a batch of paths: its chains of square roots and divisions then
-        // overlap from one path to the next, where path by path each waits on the one before.
-        let batch = batch_start..(batch_start + EMISSION_BATCH).min(paths.end);
-        starts.extend(batch.filter_map(|path| {
-            let start = emitter.start(path)?;
-            Some(LivePath::new((path - paths.start) as u32, start))
-        }));
-        for path in starts.drain(..) {
-            chunk.rays += trace_path(emitter.world, kind, path, &mut chunk.photons, &mut NoRayLog);
+    for path in paths.clone() {
+        if let Some(start) = emitter.start(path) {
+            let live = LivePath::new((path - paths.start) as u32, start);
+            chunk.rays += trace_path(emitter.world, kind, live, &mut chunk.photons, &mut NoRayLog);
         }
     }
     chunk

@@ -3,7 +3,7 @@
 //! radiance of a visible emitter. Owns the sampling densities; must not trace rays.
 
 use super::BoundingSphere;
-use super::aim::{PreparedUnion, UnionOfCones};
+use super::aim::{PreparedUnion, UnionOfCones, cone_towards};
 use crate::sampling::{
     Rng, basis, cone_solid_angle, cosine_hemisphere, uniform_cone, uniform_disc, uniform_sphere,
 };
@@ -78,11 +78,12 @@ pub fn emitted_radiance(light: &Light, cos_out: f32) -> Vec3 {
 /// between them, sin θ = (r + R) / D. Light that reaches the target leaves in those directions.
 #[inline(always)]
 fn light_to_target_cone(target: &BoundingSphere, center: Vec3, radius: f32) -> Option<(Vec3, f32)> {
-    let b = target;
-    let to = b.center - center;
-    let distance = to.length();
-    let sin_theta = (radius + b.radius) / distance;
-    (sin_theta < 1.0).then(|| (to / distance, (1.0 - sin_theta * sin_theta).sqrt()))
+    // The cone from the light's centre towards the target grown by the light's radius.
+    let grown = BoundingSphere {
+        center: target.center,
+        radius: target.radius + radius,
+    };
+    cone_towards(&grown, center)
 }
 
 /// Emits one photon. With targets in `aim`, directions are drawn only towards them (when the
