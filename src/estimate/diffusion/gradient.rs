@@ -19,6 +19,7 @@
 //! number of threads: each photon's sum is made by one thread in a fixed node order.
 
 use super::super::{NORMAL_AGREEMENT_MIN_COS, power_f64};
+use crate::photon::kdtree::LEAF_SIZE;
 use crate::photon::{KdTree, PhotonAttributes, PhotonMap};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -206,17 +207,20 @@ struct NodeSums<'a> {
     nodes: Vec<NodeSum>,
     /// Channel sum of the photon in each slot, for the leaf scan without decoding.
     powers: Vec<f64>,
-    /// The normal code every photon of leaf `j` shares, if they all share one.
-    leaf_codes: Vec<Option<u16>>,
+    /// The normal every photon of leaf `j` shares, if they all share one (decoded here once,
+    /// not per scan).
+    leaf_normals: Vec<Option<Vec3>>,
 }
 
 /// Largest angle between a node's cone and the query normal for the whole node to agree: the
 /// normal test's 60°, less a margin far above the rounding of `acos` and the dot products.
 const AGREEMENT_ANGLE: f32 = std::f32::consts::FRAC_PI_3 - 1e-3;
-/// Relative margins of the box tests: a box is skipped or taken whole only when it is clear of
-/// the rim by more than any rounding of a photon's own distance.
-const SKIP_MARGIN: f64 = 1.0 + 1e-5;
-const TAKE_MARGIN: f64 = 1.0 - 1e-5;
+/// Relative margins of the box tests. The tests are made in f32 with the operations of a
+/// photon's own distance test, in its order, so by the monotonicity of rounding a box's near
+/// and far distances already bound every computed photon distance; the margins are a second
+/// guard, cheap because they only move a few boxes from skipped or whole to opened.
+const SKIP_MARGIN: f32 = 1.0 + 1e-5;
+const TAKE_MARGIN: f32 = 1.0 - 1e-5;
 
 impl<'a> NodeSums<'a> {
     fn build(map: &'a PhotonMap) -> Self {
@@ -248,7 +252,7 @@ impl<'a> NodeSums<'a> {
             .with_min_len(4096)
             .map(|s| channel_sum(map.attributes(s)))
             .collect();
-        let leaf_codes = (leaf_base..end)
+        let leaf_normals = (leaf_base..end)
             .into_par_iter()
             .with_min_len(256)
             .map(|leaf| {
@@ -256,14 +260,16 @@ impl<'a> NodeSums<'a> {
                     .node_slots(leaf)
                     .map(|s| map.attributes(s as u32).normal_code());
                 let first = codes.next()?;
-                codes.all(|c| c == first).then_some(first)
+                codes
+                    .all(|c| c == first)
+                    .then(|| crate::photon::record::decode_octahedral(first.to_be_bytes()))
             })
             .collect();
         Self {
             tree,
             nodes,
             powers,
-            leaf_codes,
+            leaf_normals,
         }
     }
 
@@ -316,10 +322,9 @@ impl<'a> NodeSums<'a> {
         if n.upper.x < n.lower.x {
             return;
         }
-        let r2 = queries[0].radius2 as f64;
-        let (gl, gu) = (group.lower.as_dvec3(), group.upper.as_dvec3());
-        let (nl, nu) = (n.lower.as_dvec3(), n.upper.as_dvec3());
-        let near = (nl - gu).max(gl - nu).max(DVec3::ZERO);
+        let r2 = queries[0].radius2;
+        let (gl, gu, nl, nu) = (group.lower, group.upper, n.lower, n.upper);
+        let near = (nl - gu).max(gl - nu).max(Vec3::ZERO);
         if near.length_squared() > r2 * SKIP_MARGIN {
             return;
         }
@@ -370,42 +375,12 @@ impl<'a> NodeSums<'a> {
     /// Adds the photons of leaf `node` within the query's radius whose normals agree.
     fn scan_leaf(&self, map: &PhotonMap, node: usize, q: &Query, sum: &mut DVec3) {
         let (xs, ys, zs) = self.tree.coordinates();
-        if let Some(code) = self.leaf_codes[node - self.tree.leaf_base()] {
+        if let Some(normal) = self.leaf_normals[node - self.tree.leaf_base()] {
             // One surface: one normal test, then a straight loop over the leaf's arrays.
-            if crate::photon::record::decode_octahedral(code.to_be_bytes()).dot(q.normal)
-                < NORMAL_AGREEMENT_MIN_COS
-            {
+            if normal.dot(q.normal) < NORMAL_AGREEMENT_MIN_COS {
                 return;
             }
-            let slots = self.tree.node_slots(node);
-            let (xs, ys, zs) = (&xs[slots.clone()], &ys[slots.clone()], &zs[slots.clone()]);
-            let powers = &self.powers[slots];
-            // Eight independent partial sums per axis: a single running sum is a chain of
-            // dependent float adds that neither vectorises nor pipelines.
-            const LANES: usize = 8;
-            let mut acc = [[0.0f64; LANES]; 3];
-            let (qx, qy, qz, r2) = (q.x.x, q.x.y, q.x.z, q.radius2);
-            let mut add = |lane: usize, i: usize| {
-                let (dx, dy, dz) = (xs[i] - qx, ys[i] - qy, zs[i] - qz);
-                let inside = dx * dx + dy * dy + dz * dz <= r2;
-                let w = if inside { powers[i] } else { 0.0 };
-                acc[0][lane] += dx as f64 * w;
-                acc[1][lane] += dy as f64 * w;
-                acc[2][lane] += dz as f64 * w;
-            };
-            let n = powers.len().min(xs.len()).min(ys.len()).min(zs.len());
-            let mut start = 0;
-            while start + LANES <= n {
-                for lane in 0..LANES {
-                    add(lane, start + lane);
-                }
-                start += LANES;
-            }
-            for i in start..n {
-                add(i - start, i);
-            }
-            let [sx, sy, sz] = acc.map(|lanes| lanes.iter().sum::<f64>());
-            *sum += DVec3::new(sx, sy, sz);
+            *sum += self.scan_one_surface(self.tree.node_slots(node), q);
             return;
         }
         let (mut last_code, mut last_agrees) = (u32::MAX, false);
@@ -431,6 +406,43 @@ impl<'a> NodeSums<'a> {
             local += d.as_dvec3() * weight;
         }
         *sum += local;
+    }
+
+    /// The sum over the photons of `slots` within the query's radius, whose normals all agree
+    /// with the query's. Four lanes at a time over whole groups of four: a leaf's last group
+    /// reads past its end into the next leaf (or the zeros padding the arrays), and those
+    /// lanes are masked out. Four independent partial sums per axis, because one running sum
+    /// is a chain of dependent adds that neither vectorises nor pipelines; a mask and not a
+    /// branch, because about half of a rim leaf's photons are inside.
+    #[inline]
+    fn scan_one_surface(&self, slots: std::ops::Range<usize>, q: &Query) -> DVec3 {
+        let (xs, ys, zs) = self.tree.coordinates();
+        let n = slots.len();
+        let end = slots.start + n.div_ceil(4) * 4;
+        if end <= xs.len() {
+            return sum_within(
+                [
+                    &xs[slots.start..end],
+                    &ys[slots.start..end],
+                    &zs[slots.start..end],
+                ],
+                &self.powers[slots.start..end],
+                n,
+                q,
+            );
+        }
+        // The tree's last leaf: its last group would run off the arrays.
+        let mut padded = [[0.0f32; LEAF_SIZE + 3]; 3];
+        let mut powers = [0.0f64; LEAF_SIZE + 3];
+        for (i, s) in slots.clone().enumerate() {
+            padded[0][i] = xs[s];
+            padded[1][i] = ys[s];
+            padded[2][i] = zs[s];
+            powers[i] = self.powers[s];
+        }
+        let len = n.div_ceil(4) * 4;
+        let [px, py, pz] = &padded;
+        sum_within([&px[..len], &py[..len], &pz[..len]], &powers[..len], n, q)
     }
 
     /// `Σ (x_i − x) Φ_i` over the photons within `radius` of the photon in `slot` whose normals
@@ -464,6 +476,35 @@ impl<'a> NodeSums<'a> {
     }
 }
 
+/// `Σ (x_i − x) Φ_i` over the first `n` photons of the arrays (whose length is a multiple of
+/// four) within the query's radius. Four independent partial sums per axis, because one
+/// running sum is a chain of dependent adds that neither vectorises nor pipelines; a mask and
+/// not a branch, because about half of a rim leaf's photons are inside. Lanes past `n` are
+/// masked out, so the caller may pass the start of the next leaf there.
+#[inline(always)]
+fn sum_within([xs, ys, zs]: [&[f32]; 3], powers: &[f64], n: usize, q: &Query) -> DVec3 {
+    let mut acc = [[0.0f64; 4]; 3];
+    let (qx, qy, qz, r2) = (q.x.x, q.x.y, q.x.z, q.radius2);
+    let groups = xs
+        .chunks_exact(4)
+        .zip(ys.chunks_exact(4))
+        .zip(zs.chunks_exact(4))
+        .zip(powers.chunks_exact(4));
+    for (first, (((x, y), z), w)) in (0..).step_by(4).zip(groups) {
+        for lane in 0..4 {
+            let (dx, dy, dz) = (x[lane] - qx, y[lane] - qy, z[lane] - qz);
+            let take = (first + lane < n) & (dx * dx + dy * dy + dz * dz <= r2);
+            // Bits rather than a select, which the compiler makes a branch.
+            let w = f64::from_bits(w[lane].to_bits() & u64::from(take).wrapping_neg());
+            acc[0][lane] += dx as f64 * w;
+            acc[1][lane] += dy as f64 * w;
+            acc[2][lane] += dz as f64 * w;
+        }
+    }
+    let [sx, sy, sz] = acc.map(|[a, b, c, d]| (a + b) + (c + d));
+    DVec3::new(sx, sy, sz)
+}
+
 /// How a node's photons stand towards one query's disc.
 enum Cover {
     /// None of them is inside (or the node is empty).
@@ -478,10 +519,8 @@ fn classify(n: &NodeSum, q: &Query) -> Cover {
     if n.upper.x < n.lower.x {
         return Cover::None;
     }
-    let x = q.x.as_dvec3();
-    let (lower, upper) = (n.lower.as_dvec3(), n.upper.as_dvec3());
-    let r2 = q.radius2 as f64;
-    if (lower - x).max(x - upper).max(DVec3::ZERO).length_squared() > r2 * SKIP_MARGIN {
+    let (x, lower, upper, r2) = (q.x, n.lower, n.upper, q.radius2);
+    if (lower - x).max(x - upper).max(Vec3::ZERO).length_squared() > r2 * SKIP_MARGIN {
         return Cover::None;
     }
     if (x - lower).max(upper - x).length_squared() <= r2 * TAKE_MARGIN

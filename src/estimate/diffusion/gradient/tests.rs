@@ -123,3 +123,48 @@ fn photons_on_the_other_side_are_ignored_and_huge_gradients_stay_finite() {
     let g = compute_gradients(&map, 1e-8);
     assert!(g.iter().all(|g| g.is_finite() && g.x != 0.0));
 }
+
+#[test]
+fn the_lanes_past_a_leafs_end_are_masked_out() {
+    // Eight photons, all inside the disc: summing the first n must see only those n, though
+    // the four-wide groups read on to the eighth.
+    let xs: Vec<f32> = (0..8).map(|i| 0.01 * i as f32).collect();
+    let ys: Vec<f32> = (0..8).map(|i| -0.02 * i as f32).collect();
+    let zs = [0.0f32; 8];
+    let powers: Vec<f64> = (0..8).map(|i| 1.0 + i as f64).collect();
+    let q = Query {
+        x: Vec3::new(0.005, 0.0, 0.0),
+        normal: Vec3::Z,
+        radius2: 1.0,
+    };
+    for n in 0..=8usize {
+        let len = n.div_ceil(4) * 4;
+        let got = sum_within([&xs[..len], &ys[..len], &zs[..len]], &powers[..len], n, &q);
+        let want = (0..n).fold(DVec3::ZERO, |s, i| {
+            s + DVec3::new((xs[i] - q.x.x) as f64, ys[i] as f64, 0.0) * powers[i]
+        });
+        assert!((got - want).length() <= 1e-12, "n = {n}: {got} vs {want}");
+    }
+}
+
+#[test]
+fn every_photon_of_the_last_leaves_matches_the_photon_by_photon_sum() {
+    // Photon counts whose last leaf is not a whole number of four-wide groups: its scan
+    // cannot read past the arrays and goes through a padded copy.
+    for count in [1usize, 2, 3, 5, 23, 41, 6001] {
+        let map = tricky_scene(count, count as u64);
+        let radius = 0.2f32;
+        let dual = compute_gradients(&map, radius);
+        let scale = 4.0 / (PI * (radius as f64).powi(4));
+        let tolerance = map.total_power().x as f64 * radius as f64 * 1e-9 * scale;
+        let first = map.len().saturating_sub(60);
+        for (slot, got) in dual.iter().enumerate().skip(first) {
+            let want = brute_force_sum(&map, slot as u32, radius) * scale;
+            let got = got.as_dvec3();
+            assert!(
+                (got - want).length() <= tolerance + 1e-6 * got.length(),
+                "{count} photons, slot {slot}: {got} vs {want}"
+            );
+        }
+    }
+}
