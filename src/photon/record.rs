@@ -177,14 +177,14 @@ pub fn decode_rgbe(p: [u8; 4]) -> Vec3 {
 }
 
 /// Octahedral unit-vector encoding in two bytes (about 1° of error).
+#[inline]
 pub fn encode_octahedral(v: Vec3) -> [u8; 2] {
     let v = v / (v.x.abs() + v.y.abs() + v.z.abs()).max(1e-30);
-    let (mut x, mut y) = (v.x, v.y);
-    if v.z < 0.0 {
-        let (ox, oy) = (x, y);
-        x = (1.0 - oy.abs()) * sign(ox);
-        y = (1.0 - ox.abs()) * sign(oy);
-    }
+    // The lower half folds over the diagonals. Chosen by masks, not a branch: a stored
+    // photon's direction points down or up at random, and the tracer encodes one per photon.
+    let fold = v.z < 0.0;
+    let x = select(fold, (1.0 - v.y.abs()) * sign(v.x), v.x);
+    let y = select(fold, (1.0 - v.x.abs()) * sign(v.y), v.y);
     let q = |t: f32| round_non_negative(((t.clamp(-1.0, 1.0) * 0.5 + 0.5) * 254.0) as f64) as u8;
     [q(x), q(y)]
 }
@@ -222,8 +222,16 @@ fn decode_octahedral_exactly(p: [u8; 2]) -> Vec3 {
     Vec3::new(x, y, z).normalize()
 }
 
+#[inline(always)]
 fn sign(t: f32) -> f32 {
-    if t >= 0.0 { 1.0 } else { -1.0 }
+    select(t >= 0.0, 1.0, -1.0)
+}
+
+/// `if take_a { a } else { b }` by bit masks, which the compiler keeps free of branches.
+#[inline(always)]
+fn select(take_a: bool, a: f32, b: f32) -> f32 {
+    let mask = 0u32.wrapping_sub(u32::from(take_a));
+    f32::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
 #[cfg(test)]
@@ -308,5 +316,39 @@ mod tests {
             assert!(v.dot(d) > (2.0f32).to_radians().cos(), "{v} -> {d}");
         }
         assert_eq!(decode_octahedral(encode_octahedral(Vec3::Z)), Vec3::Z);
+    }
+
+    #[test]
+    fn octahedral_folding_by_masks_matches_the_branching_rule() {
+        // The fold written plainly, with the sign rule `t >= 0 → 1` (so −0 counts as positive).
+        fn reference(v: Vec3) -> [u8; 2] {
+            let v = v / (v.x.abs() + v.y.abs() + v.z.abs()).max(1e-30);
+            let sign = |t: f32| if t >= 0.0 { 1.0 } else { -1.0 };
+            let (mut x, mut y) = (v.x, v.y);
+            if v.z < 0.0 {
+                x = (1.0 - v.y.abs()) * sign(v.x);
+                y = (1.0 - v.x.abs()) * sign(v.y);
+            }
+            let q = |t: f32| ((t.clamp(-1.0, 1.0) * 0.5 + 0.5) * 254.0).round() as u8;
+            [q(x), q(y)]
+        }
+        let mut s = 7u32;
+        let mut r = || {
+            s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+            (s >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+        };
+        let edges = [0.0, -0.0, 1.0, -1.0, 0.5, -0.5];
+        for &x in &edges {
+            for &y in &edges {
+                for &z in &edges {
+                    let v = Vec3::new(x, y, z);
+                    assert_eq!(encode_octahedral(v), reference(v), "{v:?}");
+                }
+            }
+        }
+        for _ in 0..100_000 {
+            let v = Vec3::new(r(), r(), r());
+            assert_eq!(encode_octahedral(v), reference(v), "{v:?}");
+        }
     }
 }

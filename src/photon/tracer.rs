@@ -472,7 +472,7 @@ fn trace_path(
 
 /// Moves one path on by the hit of its last ray, appending a photon to `stored` where it
 /// leaves one; returns whether the path goes on.
-#[inline]
+#[inline(always)]
 fn advance(
     world: &World,
     kind: MapKind,

@@ -135,7 +135,7 @@ pub struct PreparedUnion {
 }
 
 impl UnionOfCones {
-    fn empty() -> Self {
+    pub fn empty() -> Self {
         Self {
             cones: [(Vec3::Z, 1.0); MAX_TARGETS],
             cumulative: [0.0; MAX_TARGETS],
@@ -171,10 +171,23 @@ impl UnionOfCones {
     #[inline(always)]
     pub fn towards(targets: &[BoundingSphere], origin: Vec3) -> Option<Self> {
         let mut union = Self::empty();
+        union.aim(targets, origin).then_some(union)
+    }
+
+    /// Makes this the union of the cones from `origin` towards every target, in place (a
+    /// light drawing a union per photon does not copy it around); false, and no union, where
+    /// [`UnionOfCones::towards`] gives `None`.
+    #[inline(always)]
+    pub fn aim(&mut self, targets: &[BoundingSphere], origin: Vec3) -> bool {
+        self.len = 0;
         for target in targets {
-            union.push(cone_towards(target, origin)?);
+            let Some(cone) = cone_towards(target, origin) else {
+                self.len = 0;
+                return false;
+            };
+            self.push(cone);
         }
-        (union.len > 0).then_some(union)
+        self.len > 0
     }
 
     /// The same union with every cone's frame built once, for drawing from it many times.

@@ -282,6 +282,7 @@ impl World {
     }
 
     /// Position and normals of a hit.
+    #[inline]
     pub fn resolve(&self, closest: ClosestHit) -> Interaction {
         let ClosestHit {
             hit,
