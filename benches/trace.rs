@@ -11,7 +11,10 @@
 //! The ratio of the tracer's rays per second to Embree's shows what everything that is not
 //! Embree costs. Against emission rays it also carries the difference between first rays and
 //! bounce rays (rays leaving a surface, inside glass); against the replay it does not.
-//! All run on 1 and 2 threads (rayon pools with flush-to-zero, as the renderer uses).
+//! All run on 1 and 2 threads (rayon pools with flush-to-zero, as the renderer uses). Beside
+//! the wall-clock 2-thread speedup, the table gives the speedup on two free cores: one
+//! thread's CPU seconds over half of two threads' (all the process's threads, from
+//! `/proc/self/task/*/schedstat`), which the machine's other load does not move.
 //!
 //! `cargo bench --bench trace`. Criterion prints each figure; then each case runs a few rounds
 //! that time every side back to back, and a table of their medians, the ratios and the
@@ -105,6 +108,8 @@ fn embree_hits(world: &World, rays: &[(Vec3, Vec3)]) -> usize {
 struct CaseFigures {
     /// `seconds[side][threads index][round]`.
     seconds: [[Vec<f64>; 2]; 3],
+    /// The same rounds' CPU seconds, all threads of the process together.
+    cpu: [[Vec<f64>; 2]; 3],
     stored: u64,
     rays: u64,
     /// Emission rays: the first rays of as many paths as the tracer casts rays (fewer only
@@ -123,6 +128,7 @@ fn bench_case(c: &mut Criterion, case: &Case, all_figures: &mut Vec<CaseFigures>
     let replay = path_rays(&world, case.kind, SEED, 0..first.counts.emitted);
     let mut figures = CaseFigures {
         seconds: Default::default(),
+        cpu: Default::default(),
         stored: first.len() as u64,
         rays: first.rays,
         emission_rays: emission.len() as u64,
@@ -171,23 +177,42 @@ fn bench_case(c: &mut Criterion, case: &Case, all_figures: &mut Vec<CaseFigures>
             let tracer = seconds_of(|| pool.install(|| trace(&world, case)));
             let emitted = seconds_of(|| pool.install(|| embree_hits(&world, &emission)));
             let replayed = seconds_of(|| pool.install(|| embree_hits(&world, &replay)));
-            for (side, seconds) in [
+            for (side, (seconds, cpu)) in [
                 (Side::Tracer, tracer),
                 (Side::Emission, emitted),
                 (Side::Replay, replayed),
             ] {
                 figures.seconds[side as usize][t].push(seconds);
+                figures.cpu[side as usize][t].push(cpu);
             }
         }
     }
     all_figures.push(figures);
 }
 
-/// Wall-clock seconds of one call.
-fn seconds_of<R>(f: impl FnOnce() -> R) -> f64 {
-    let start = Instant::now();
+/// Wall-clock and CPU seconds of one call.
+fn seconds_of<R>(f: impl FnOnce() -> R) -> (f64, f64) {
+    let (start, cpu) = (Instant::now(), cpu_seconds());
     black_box(f());
-    start.elapsed().as_secs_f64()
+    (start.elapsed().as_secs_f64(), cpu_seconds() - cpu)
+}
+
+/// CPU seconds of every thread of this process so far, to the nanosecond: the first field of
+/// each thread's `/proc/self/task/*/schedstat` (Linux; NaN elsewhere). Rayon's workers live as
+/// long as their pool, so a difference of two readings around a call counts all its threads.
+fn cpu_seconds() -> f64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return f64::NAN;
+    };
+    let mut nanoseconds = 0u64;
+    for task in tasks.flatten() {
+        let stat = std::fs::read_to_string(task.path().join("schedstat")).unwrap_or_default();
+        match stat.split_whitespace().next().map(str::parse::<u64>) {
+            Some(Ok(ns)) => nanoseconds += ns,
+            _ => return f64::NAN,
+        }
+    }
+    nanoseconds as f64 * 1e-9
 }
 
 fn median(samples: &[f64]) -> f64 {
@@ -243,13 +268,21 @@ fn print_table(all_figures: &[CaseFigures]) {
             );
         }
         let speedup = |side| ratio(side, side, (1, 0));
+        // On two free cores: one thread's CPU time over half of two threads' (medians). It
+        // leaves out the machine's other load, which the wall-clock speedup carries.
+        let free_cores = |side: Side| {
+            let cpu = |t: usize| median(&figures.cpu[side as usize][t]);
+            cpu(0) / (0.5 * cpu(1))
+        };
         eprintln!(
             "{:<20}     2-thread speedup: tracer {:.2}, emission {:.2}, replay {:.2}; \
-             rays per stored photon {:.2}",
+             on two free cores (CPU): tracer {:.2}, replay {:.2}; rays per stored photon {:.2}",
             "",
             speedup(tracer),
             speedup(emission),
             speedup(replay),
+            free_cores(Side::Tracer),
+            free_cores(Side::Replay),
             figures.rays as f64 / figures.stored as f64
         );
     }
