@@ -2,7 +2,7 @@
 //! paper's constructed-distribution experiment (Section 4, Figures 4-6), and score it against
 //! the known density. Owns the command's flags, the photon sources (a CSV file or a built-in
 //! distribution), the orchestration and the outputs; it uses the estimates through
-//! [`RadianceEstimate`] and must not implement kernels, trace rays or touch scenes.
+//! [`RadianceEstimate`](crate::estimate::RadianceEstimate) and must not implement kernels, trace rays or touch scenes.
 //!
 //! A pixel's value is the estimate at its centre of photon power per unit area (irradiance: no
 //! BRDF, no 1/π). Row 0 of every output is the top of the extent (`Y1`). The truth written with

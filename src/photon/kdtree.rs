@@ -9,13 +9,13 @@
 //! `2i+1`) and store only a split value (4 bytes) and a split axis (1 byte): about 0.3 bytes
 //! per point on top of the 12-byte position and the 4-byte source index. Positions are kept one
 //! array per axis so that a leaf's distances are computed with SIMD. Construction (median
-//! splits on the axis of largest spread, in parallel) lives in [`build`].
+//! splits on the axis of largest spread, in parallel) lives in `build`.
 //!
 //! Queries walk the tree near child first and skip a far child by the squared distance from the
 //! query to its cell, kept per axis as the walk goes (Arya & Mount). That bound is computed with
 //! the same float operations as a point's distance, so it never exceeds the distance of any
 //! point in the cell: pruning is exact in floats, not merely in reals. Leaves are scanned
-//! linearly. How a k-nearest query keeps its `k` best is in [`nearest`]; the result's farthest
+//! linearly. How a k-nearest query keeps its `k` best is in `nearest`; the result's farthest
 //! neighbour is known without a scan. Queries allocate nothing once the caller's
 //! [`Neighbours`] has grown to the largest `k` used.
 

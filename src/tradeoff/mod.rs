@@ -10,7 +10,7 @@
 //! - [`constructed`]: the constructed-distribution target (exact density).
 //! - [`scene_target`]: the scene target (the caustic contribution of the eye pass).
 //! - [`scene_metrics`]: a scene's errors and regions, defined from its reference image.
-//! - [`reference`]: `dpm reference`, the cached reference image of a scene.
+//! - [`reference`](mod@reference): `dpm reference`, the cached reference image of a scene.
 
 pub mod constructed;
 pub mod pareto;
@@ -87,10 +87,10 @@ pub struct TradeoffArgs {
     /// The error plotted against time and used for the Pareto fronts.
     #[arg(long, value_enum, default_value_t = ErrorKind::Rmse)]
     pub error: ErrorKind,
-    /// CSV of every run. Default: out/tradeoff/<target>.csv.
+    /// CSV of every run. Default: out/tradeoff/TARGET.csv.
     #[arg(long, value_name = "FILE.csv")]
     pub csv: Option<PathBuf>,
-    /// The plot of error against time. Default: out/tradeoff/<target>.svg.
+    /// The plot of error against time. Default: out/tradeoff/TARGET.svg.
     #[arg(long, value_name = "FILE.svg")]
     pub svg: Option<PathBuf>,
     /// Stored photons of a scene's reference. Default: 20× the largest of --photons.

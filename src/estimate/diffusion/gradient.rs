@@ -10,7 +10,7 @@
 //!
 //! Speed: the sum is linear in the photons, so a kd-tree node whose box lies wholly inside the
 //! disc and whose photons' normals all agree with the query's contributes
-//! `Σ (x_i − c) Φ_i + (c − x) Σ Φ_i` from sums kept per node ([`NodeSums`]) instead of photon
+//! `Σ (x_i − c) Φ_i + (c − x) Σ Φ_i` from sums kept per node (`NodeSums`) instead of photon
 //! by photon. Only nodes that straddle the disc's rim are opened, so a photon's cost grows with
 //! the rim, not with the number of photons inside: dense caustics, where a disc holds tens of
 //! thousands of photons, no longer make the pass quadratic. The photons summed are exactly the
@@ -86,7 +86,7 @@ pub fn gradient_pass(map: &mut PhotonMap, radius: f32) {
     map.set_gradients(&gradients);
 }
 
-/// The photon-by-photon sum `Σ (x_i − x) Φ_i` (unscaled), for tests of [`NodeSums`].
+/// The photon-by-photon sum `Σ (x_i − x) Φ_i` (unscaled), for tests of the node sums.
 pub fn brute_force_sum(map: &PhotonMap, slot: u32, radius: f32) -> DVec3 {
     let x = map.position(slot);
     let normal = map.attributes(slot).normal();
@@ -408,12 +408,10 @@ impl<'a> NodeSums<'a> {
         *sum += local;
     }
 
-    /// The sum over the photons of `slots` within the query's radius, whose normals all agree
-    /// with the query's. Four lanes at a time over whole groups of four: a leaf's last group
-    /// reads past its end into the next leaf (or the zeros padding the arrays), and those
-    /// lanes are masked out. Four independent partial sums per axis, because one running sum
-    /// is a chain of dependent adds that neither vectorises nor pipelines; a mask and not a
-    /// branch, because about half of a rim leaf's photons are inside.
+    /// The sum over the photons of `slots` (one leaf, whose normals all agree with the
+    /// query's) within the query's radius, by [`sum_within`] in whole groups of four: a leaf's
+    /// last group runs on into the next leaf's photons, which the lane mask leaves out; the
+    /// tree's last leaf, which has no next one, goes through a padded copy.
     #[inline]
     fn scan_one_surface(&self, slots: std::ops::Range<usize>, q: &Query) -> DVec3 {
         let (xs, ys, zs) = self.tree.coordinates();
