@@ -168,3 +168,41 @@ fn every_photon_of_the_last_leaves_matches_the_photon_by_photon_sum() {
         }
     }
 }
+
+#[test]
+fn far_from_the_origin_the_box_tests_still_agree_with_each_photons_own() {
+    // At |x| ≈ 10⁴ an f32 has about a millimetre of resolution, so a photon's distance and a
+    // box's are both rounded coarsely; the box tests must still never skip a photon the
+    // photon-by-photon sum takes, nor take one it skips.
+    let offset = Vec3::new(12_345.6, -9_876.5, 4_321.0);
+    let mut rng = Lcg(11);
+    // Half spread thinly, half in a dense patch, so that many photons lie near every rim.
+    let photons: Vec<Photon> = (0..4000)
+        .map(|i| {
+            let spread = if i % 2 == 0 { 0.5 } else { 0.03 };
+            let p = offset + Vec3::new(rng.unit(), rng.unit(), 0.0) * spread;
+            Photon::new(p, Vec3::splat(1.0 + rng.unit()), -Vec3::Z, Vec3::Z)
+        })
+        .collect();
+    let map = PhotonMap::build(photons, 4000);
+    let sums = NodeSums::build(&map);
+    for radius in [0.004f32, 0.02, 0.1] {
+        let dual = compute_gradients(&map, radius);
+        let scale = 4.0 / (PI * (radius as f64).powi(4));
+        let tolerance = map.total_power().x as f64 * radius as f64 * 1e-9;
+        for slot in (0..map.len() as u32).step_by(3) {
+            let want = brute_force_sum(&map, slot, radius);
+            let got = sums.sum_at(&map, slot, radius);
+            assert!(
+                (got - want).length() <= tolerance,
+                "r = {radius}, slot {slot}: {got} vs {want}"
+            );
+            let got = dual[slot as usize].as_dvec3();
+            assert!(
+                (got - want * scale).length() <= tolerance * scale + 1e-6 * got.length(),
+                "dual, r = {radius}, slot {slot}: {got} vs {}",
+                want * scale
+            );
+        }
+    }
+}
