@@ -44,28 +44,34 @@ fn tricky_scene(count: usize, seed: u64) -> PhotonMap {
     PhotonMap::build(photons, count as u64)
 }
 
+/// Checks the one-photon walk ([`NodeSums::sum_at`]) and the pass itself (the dual walk,
+/// scaled) against the photon-by-photon sum at `slots`.
+fn assert_matches_photon_by_photon(map: &PhotonMap, radius: f32, slots: impl Iterator<Item = u32>) {
+    let sums = NodeSums::build(map);
+    let dual = compute_gradients(map, radius);
+    let scale = 4.0 / (PI * (radius as f64).powi(4));
+    let tolerance = map.total_power().x as f64 * radius as f64 * 1e-9;
+    for slot in slots {
+        let want = brute_force_sum(map, slot, radius);
+        let got = sums.sum_at(map, slot, radius);
+        assert!(
+            (got - want).length() <= tolerance,
+            "r = {radius}, slot {slot}: {got} vs {want}"
+        );
+        let got = dual[slot as usize].as_dvec3();
+        assert!(
+            (got - want * scale).length() <= tolerance * scale + 1e-6 * got.length(),
+            "dual, r = {radius}, slot {slot}: {got} vs {}",
+            want * scale
+        );
+    }
+}
+
 #[test]
 fn node_sums_match_the_photon_by_photon_sum() {
     for (seed, radius) in [(1, 0.004f32), (2, 0.03), (3, 0.15), (4, 0.6), (5, 5.0)] {
         let map = tricky_scene(6000, seed);
-        let sums = NodeSums::build(&map);
-        let dual = compute_gradients(&map, radius);
-        let scale = 4.0 / (PI * (radius as f64).powi(4));
-        let tolerance = map.total_power().x as f64 * radius as f64 * 1e-9;
-        for slot in (0..map.len() as u32).step_by(7) {
-            let want = brute_force_sum(&map, slot, radius);
-            let got = sums.sum_at(&map, slot, radius);
-            assert!(
-                (got - want).length() <= tolerance,
-                "r = {radius}, slot {slot}: {got} vs {want}"
-            );
-            let got = dual[slot as usize].as_dvec3();
-            assert!(
-                (got - want * scale).length() <= tolerance * scale + 1e-6 * got.length(),
-                "dual, r = {radius}, slot {slot}: {got} vs {}",
-                want * scale
-            );
-        }
+        assert_matches_photon_by_photon(&map, radius, (0..map.len() as u32).step_by(7));
     }
 }
 
@@ -153,19 +159,8 @@ fn every_photon_of_the_last_leaves_matches_the_photon_by_photon_sum() {
     // cannot read past the arrays and goes through a padded copy.
     for count in [1usize, 2, 3, 5, 23, 41, 6001] {
         let map = tricky_scene(count, count as u64);
-        let radius = 0.2f32;
-        let dual = compute_gradients(&map, radius);
-        let scale = 4.0 / (PI * (radius as f64).powi(4));
-        let tolerance = map.total_power().x as f64 * radius as f64 * 1e-9 * scale;
-        let first = map.len().saturating_sub(60);
-        for (slot, got) in dual.iter().enumerate().skip(first) {
-            let want = brute_force_sum(&map, slot as u32, radius) * scale;
-            let got = got.as_dvec3();
-            assert!(
-                (got - want).length() <= tolerance + 1e-6 * got.length(),
-                "{count} photons, slot {slot}: {got} vs {want}"
-            );
-        }
+        let first = map.len().saturating_sub(60) as u32;
+        assert_matches_photon_by_photon(&map, 0.2, first..map.len() as u32);
     }
 }
 
@@ -185,24 +180,7 @@ fn far_from_the_origin_the_box_tests_still_agree_with_each_photons_own() {
         })
         .collect();
     let map = PhotonMap::build(photons, 4000);
-    let sums = NodeSums::build(&map);
     for radius in [0.004f32, 0.02, 0.1] {
-        let dual = compute_gradients(&map, radius);
-        let scale = 4.0 / (PI * (radius as f64).powi(4));
-        let tolerance = map.total_power().x as f64 * radius as f64 * 1e-9;
-        for slot in (0..map.len() as u32).step_by(3) {
-            let want = brute_force_sum(&map, slot, radius);
-            let got = sums.sum_at(&map, slot, radius);
-            assert!(
-                (got - want).length() <= tolerance,
-                "r = {radius}, slot {slot}: {got} vs {want}"
-            );
-            let got = dual[slot as usize].as_dvec3();
-            assert!(
-                (got - want * scale).length() <= tolerance * scale + 1e-6 * got.length(),
-                "dual, r = {radius}, slot {slot}: {got} vs {}",
-                want * scale
-            );
-        }
+        assert_matches_photon_by_photon(&map, radius, (0..map.len() as u32).step_by(3));
     }
 }
