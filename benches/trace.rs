@@ -14,7 +14,8 @@
 //! All run on 1 and 2 threads (rayon pools with flush-to-zero, as the renderer uses). Beside
 //! the wall-clock 2-thread speedup, the table gives the speedup on two free cores: one
 //! thread's CPU seconds over half of two threads' (all the process's threads, from
-//! `/proc/self/task/*/schedstat`), which the machine's other load does not move.
+//! `/proc/self/task/*/schedstat`), which the machine's other load does not move. The replay
+//! ratio is given by CPU seconds as well, for the same reason.
 //!
 //! `cargo bench --bench trace`. Criterion prints each figure; then each case runs a few rounds
 //! that time every side back to back, and a table of their medians, the ratios and the
@@ -233,22 +234,30 @@ fn print_table(all_figures: &[CaseFigures]) {
     eprintln!();
     eprintln!(
         "trace bench: medians of {ROUNDS} interleaved rounds, in millions per second; \
-         ratio = tracer rays/s / Embree rays/s (median of the per-round ratios)"
+         ratio = tracer rays/s / Embree rays/s (median of the per-round ratios; \
+         by CPU: the replay ratio from CPU seconds)"
     );
     eprintln!(
-        "{:<20} {:>3} {:>9} {:>9} {:>9} {:>6} {:>9} {:>6}",
-        "case", "thr", "photons", "tracer", "emission", "ratio", "replay", "ratio"
+        "{:<20} {:>3} {:>9} {:>9} {:>9} {:>6} {:>9} {:>6} {:>6}",
+        "case", "thr", "photons", "tracer", "emission", "ratio", "replay", "ratio", "by CPU"
     );
     for (case, figures) in CASES.iter().zip(all_figures) {
         let seconds = |side: Side, t: usize| &figures.seconds[side as usize][t];
+        let cpu = |side: Side, t: usize| &figures.cpu[side as usize][t];
         // Per round: `count / seconds` of one side over the same of another.
-        let ratio = |(a, na): (Side, u64), (b, nb): (Side, u64), (ta, tb): (usize, usize)| {
-            let per_round: Vec<f64> = seconds(a, ta)
-                .iter()
-                .zip(seconds(b, tb))
+        let per_round_ratio = |a: &[f64], na: u64, b: &[f64], nb: u64| {
+            let per_round: Vec<f64> = (a.iter().zip(b))
                 .map(|(sa, sb)| (na as f64 / sa) / (nb as f64 / sb))
                 .collect();
             median(&per_round)
+        };
+        let ratio = |(a, na): (Side, u64), (b, nb): (Side, u64), (ta, tb): (usize, usize)| {
+            per_round_ratio(seconds(a, ta), na, seconds(b, tb), nb)
+        };
+        // The same by CPU seconds: time the thread spent off the core, waiting on the
+        // machine's other load, drops out.
+        let cpu_ratio = |(a, na): (Side, u64), (b, nb): (Side, u64), t: usize| {
+            per_round_ratio(cpu(a, t), na, cpu(b, t), nb)
         };
         let tracer = (Side::Tracer, figures.rays);
         let emission = (Side::Emission, figures.emission_rays);
@@ -256,7 +265,7 @@ fn print_table(all_figures: &[CaseFigures]) {
         for (t, threads) in THREADS.iter().enumerate() {
             let rate = |(side, n): (Side, u64)| n as f64 / median(seconds(side, t)) / 1e6;
             eprintln!(
-                "{:<20} {:>3} {:>9.3} {:>9.3} {:>9.3} {:>6.2} {:>9.3} {:>6.2}",
+                "{:<20} {:>3} {:>9.3} {:>9.3} {:>9.3} {:>6.2} {:>9.3} {:>6.2} {:>6.2}",
                 case.name,
                 threads,
                 rate((Side::Tracer, figures.stored)),
@@ -265,15 +274,13 @@ fn print_table(all_figures: &[CaseFigures]) {
                 ratio(tracer, emission, (t, t)),
                 rate(replay),
                 ratio(tracer, replay, (t, t)),
+                cpu_ratio(tracer, replay, t),
             );
         }
         let speedup = |side| ratio(side, side, (1, 0));
         // On two free cores: one thread's CPU time over half of two threads' (medians). It
         // leaves out the machine's other load, which the wall-clock speedup carries.
-        let free_cores = |side: Side| {
-            let cpu = |t: usize| median(&figures.cpu[side as usize][t]);
-            cpu(0) / (0.5 * cpu(1))
-        };
+        let free_cores = |side: Side| median(cpu(side, 0)) / (0.5 * median(cpu(side, 1)));
         eprintln!(
             "{:<20}     2-thread speedup: tracer {:.2}, emission {:.2}, replay {:.2}; \
              on two free cores (CPU): tracer {:.2}, replay {:.2}; rays per stored photon {:.2}",

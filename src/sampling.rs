@@ -109,12 +109,17 @@ pub fn sin_cos_turns(t: f32) -> (f32, f32) {
     let k = (quarters + 0.5) as u32;
     let x = (quarters - k as f32) * std::f32::consts::FRAC_PI_2;
     let x2 = x * x;
-    // Next terms: x¹¹/11! and x¹²/12!, below 2e-9 on [−π/4, π/4].
-    let sin =
-        x * (1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 / 362_880.0))));
+    // Next terms: x¹¹/11! and x¹²/12!, below 2e-9 on [−π/4, π/4]. Every coefficient is a
+    // constant multiplied, none a divisor: `x2 / 9!` was a division at the head of the chain.
+    // (The same bits as dividing for all 2²⁴ values `Rng::next_f32` gives, checked.)
+    let sin = x
+        * (1.0
+            + x2 * (-1.0 / 6.0
+                + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))));
     let cos = 1.0
         + x2 * (-0.5
-            + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 - x2 / 3_628_800.0))));
+            + x2 * (1.0 / 24.0
+                + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 - x2 * (1.0 / 3_628_800.0)))));
     // Turned by k quarter turns: (sin, cos), (cos, −sin), (−sin, −cos), (−cos, sin). Chosen
     // by bit masks, not a branch: k is random, and a mispredicted branch per sample stalls the
     // tracer more than the polynomials cost.
@@ -150,9 +155,15 @@ pub fn uniform_disc(u: (f32, f32)) -> (f32, f32) {
 /// Cosine-weighted direction around the unit normal `n` (pdf cosθ/π).
 #[inline(always)]
 pub fn cosine_hemisphere(n: Vec3, u: (f32, f32)) -> Vec3 {
+    cosine_hemisphere_in(basis(n), n, u)
+}
+
+/// [`cosine_hemisphere`] with the tangents `(t, b)` of `n` from [`basis`] already worked out
+/// (a quad light's normal is the same for every photon).
+#[inline(always)]
+pub fn cosine_hemisphere_in((t, b): (Vec3, Vec3), n: Vec3, u: (f32, f32)) -> Vec3 {
     let r = u.0.sqrt();
     let (sin, cos) = sin_cos_turns(u.1);
-    let (t, b) = basis(n);
     let z = (1.0 - u.0).max(0.0).sqrt();
     // Unit to within a few ulps without normalising: r² + z² = 1 in an orthonormal frame.
     t * (r * cos) + b * (r * sin) + n * z
@@ -196,6 +207,10 @@ impl ConeFrame {
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
         let (sin, cos) = sin_cos_turns(u.1);
         self.t * (sin_t * cos) + self.b * (sin_t * sin) + self.axis * cos_t
+    }
+
+    pub fn axis(&self) -> Vec3 {
+        self.axis
     }
 
     pub fn cos_max(&self) -> f32 {

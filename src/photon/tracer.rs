@@ -132,6 +132,7 @@ impl<'w> Emitter<'w> {
 
     /// Path `index`: its generator (for the rest of the path) and first ray, or `None` when it
     /// carries no flux and so casts no ray.
+    #[inline(always)]
     fn start(&self, index: u64) -> Option<PathStart> {
         let mut rng = self.streams.rng(index);
         let l = self.chooser.pick(rng.next_f32());

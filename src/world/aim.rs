@@ -200,6 +200,16 @@ impl UnionOfCones {
         }
     }
 
+    /// Cone `k`: its unit axis and the cosine of its half-angle.
+    pub fn cone(&self, k: usize) -> (Vec3, f32) {
+        self.cones[..self.len][k]
+    }
+
+    /// The solid angles of cones `0..=k` summed.
+    pub fn cumulative(&self, k: usize) -> f32 {
+        self.cumulative[..self.len][k]
+    }
+
     /// Total solid angle of the cones (their union where they do not overlap).
     pub fn solid_angle(&self) -> f32 {
         self.cumulative[self.len - 1]
@@ -214,21 +224,7 @@ impl UnionOfCones {
 
     #[inline(always)]
     fn sample_with(&self, rng: &mut Rng, frame: impl Fn(usize) -> ConeFrame) -> (Vec3, f32) {
-        let total = self.solid_angle();
-        if self.len == 1 {
-            return (frame(0).sample(rng.next_2d()), total);
-        }
-        let pick = rng.next_f32() * total;
-        let k = (self.cumulative[..self.len].iter())
-            .position(|&c| pick < c)
-            .unwrap_or(self.len - 1);
-        let direction = frame(k).sample(rng.next_2d());
-        // The cone it was drawn from counts whatever rounding says of it.
-        let holding = 1
-            + (self.cones[..self.len].iter().enumerate())
-                .filter(|&(j, &(axis, cos_max))| j != k && direction.dot(axis) >= cos_max)
-                .count();
-        (direction, total / holding as f32)
+        draw_from_cones(&self.cumulative[..self.len], |j| self.cones[j], frame, rng)
     }
 
     /// Whether every cone lies wholly behind a surface with unit `normal`, so that a surface
@@ -241,6 +237,36 @@ impl UnionOfCones {
             along < 0.0 && along * along > 1.0 - cos_max * cos_max + 3e-3
         })
     }
+}
+
+/// A direction drawn uniformly from a union of cones, and the reciprocal of its density: a cone
+/// picked in proportion to its solid angle (`cumulative`, summed up to and including each),
+/// a direction drawn in it from its `frame`, and the density counted over the cones (`cone`:
+/// unit axis and cosine of the half-angle) that hold it.
+#[inline(always)]
+pub(crate) fn draw_from_cones(
+    cumulative: &[f32],
+    cone: impl Fn(usize) -> (Vec3, f32),
+    frame: impl Fn(usize) -> ConeFrame,
+    rng: &mut Rng,
+) -> (Vec3, f32) {
+    let len = cumulative.len();
+    let total = cumulative[len - 1];
+    if len == 1 {
+        return (frame(0).sample(rng.next_2d()), total);
+    }
+    let pick = rng.next_f32() * total;
+    let k = cumulative.iter().position(|&c| pick < c).unwrap_or(len - 1);
+    let direction = frame(k).sample(rng.next_2d());
+    // The cone it was drawn from counts whatever rounding says of it.
+    let holding = 1
+        + (0..len)
+            .filter(|&j| {
+                let (axis, cos_max) = cone(j);
+                j != k && direction.dot(axis) >= cos_max
+            })
+            .count();
+    (direction, total / holding as f32)
 }
 
 impl PreparedUnion {

@@ -4,8 +4,10 @@
 
 use super::BoundingSphere;
 use super::aim::{PreparedUnion, UnionOfCones, cone_towards};
+use super::aim_grid::{AimGrid, CellDraw};
 use crate::sampling::{
-    Rng, basis, cone_solid_angle, cosine_hemisphere, uniform_cone, uniform_disc, uniform_sphere,
+    Rng, basis, cone_solid_angle, cosine_hemisphere, cosine_hemisphere_in, uniform_cone,
+    uniform_disc, uniform_sphere,
 };
 use crate::scene::Light;
 use glam::Vec3;
@@ -86,15 +88,10 @@ fn light_to_target_cone(target: &BoundingSphere, center: Vec3, radius: f32) -> O
     cone_towards(&grown, center)
 }
 
-/// Emits one photon. With targets in `aim`, directions are drawn only towards them (when the
-/// emission point is outside them all, see [`UnionOfCones`]) and the flux is weighted by the
-/// solid angle kept.
-pub fn emit(light: &Light, aim: &[BoundingSphere], rng: &mut Rng) -> Emission {
-    LightEmitter::new(light, aim).emit(rng)
-}
-
 /// Emission from one light towards its targets, with all that stays the same from photon to
-/// photon worked out once: the tracer draws millions of photons from each light.
+/// photon worked out once: the tracer draws millions of photons from each light. With targets,
+/// directions are drawn only towards them (when the emission point is outside them all, see
+/// [`UnionOfCones`] and [`AimGrid`]) and the flux is weighted by the solid angle kept.
 #[derive(Clone, Debug)]
 pub struct LightEmitter {
     source: Source,
@@ -121,12 +118,17 @@ enum Source {
         toward_targets: Option<PreparedUnion>,
         power: Vec3,
     },
+    /// Aimed: directions from the cones of the point's cell ([`AimGrid`]), or from the point's
+    /// own cones in cells too close to a target. Not aimed: a cosine-weighted direction.
     Quad {
         corner: Vec3,
         edge_u: Vec3,
         edge_v: Vec3,
         normal: Vec3,
+        /// The tangents of `normal` ([`basis`]), for unaimed photons.
+        tangents: (Vec3, Vec3),
         power: Vec3,
+        grid: Option<AimGrid>,
     },
 }
 
@@ -167,13 +169,18 @@ impl LightEmitter {
                 edge_u,
                 edge_v,
                 power,
-            } => Source::Quad {
-                corner,
-                edge_u,
-                edge_v,
-                normal: quad_area_normal(edge_u, edge_v).1,
-                power,
-            },
+            } => {
+                let normal = quad_area_normal(edge_u, edge_v).1;
+                Source::Quad {
+                    corner,
+                    edge_u,
+                    edge_v,
+                    normal,
+                    tangents: basis(normal),
+                    power,
+                    grid: AimGrid::new(corner, edge_u, edge_v, normal, aim),
+                }
+            }
         };
         Self {
             source,
@@ -235,11 +242,34 @@ impl LightEmitter {
                 edge_u,
                 edge_v,
                 normal,
+                tangents,
                 power,
+                ref grid,
             } => {
                 let (s, t) = rng.next_2d();
                 let origin = corner + s * edge_u + t * edge_v;
-                surface_emission(origin, normal, power, &self.aim, rng)
+                let Some(grid) = grid else {
+                    // Unaimed: as `surface_emission` without targets.
+                    return Emission {
+                        origin,
+                        direction: cosine_hemisphere_in(tangents, normal, rng.next_2d()),
+                        flux: power,
+                    };
+                };
+                match grid.draw(s, t, origin, rng) {
+                    // flux = Φ cosθ / (π pdf_ω), as in `surface_emission`.
+                    CellDraw::Aimed(direction, weight) => Emission {
+                        origin,
+                        direction,
+                        flux: power * (direction.dot(normal).max(0.0) * weight / PI),
+                    },
+                    CellDraw::Nothing => Emission {
+                        origin,
+                        direction: normal,
+                        flux: Vec3::ZERO,
+                    },
+                    CellDraw::PerPoint => surface_emission(origin, normal, power, &self.aim, rng),
+                }
             }
         }
     }
@@ -254,14 +284,19 @@ fn surface_emission(
     aim: &[BoundingSphere],
     rng: &mut Rng,
 ) -> Emission {
+    let cosine_weighted = |rng: &mut Rng| Emission {
+        origin,
+        direction: cosine_hemisphere(normal, rng.next_2d()),
+        flux: power,
+    };
+    // Unaimed (the global map's photons): not even an empty union to write.
+    if aim.is_empty() {
+        return cosine_weighted(rng);
+    }
     // Built in place: a union returned by value is copied whole (168 bytes) per photon.
     let mut cones = UnionOfCones::empty();
     if !cones.aim(aim, origin) {
-        return Emission {
-            origin,
-            direction: cosine_hemisphere(normal, rng.next_2d()),
-            flux: power,
-        };
+        return cosine_weighted(rng);
     }
     // When every cone lies behind the surface (half of an aimed sphere light) the photon
     // carries nothing: skip drawing its direction.
@@ -390,9 +425,10 @@ mod tests {
             let r = 0.2f32;
             let mut flux = Vec3::ZERO;
             let m = 2_000_000;
+            let emitter = LightEmitter::new(&light, &[]);
             for i in 0..m {
                 let mut rng = Rng::for_index(2, Stream::CausticPhotons, i);
-                let e = emit(&light, &[], &mut rng);
+                let e = emitter.emit(&mut rng);
                 if e.direction.z < 0.0 {
                     let t = -e.origin.z / e.direction.z;
                     let p = e.origin + t * e.direction;
@@ -431,9 +467,10 @@ mod tests {
                 let into = |aim: &[BoundingSphere], seed: u64| {
                     let m = 1_000_000;
                     let mut flux = vec![Vec3::ZERO; aim.len()];
+                    let emitter = LightEmitter::new(&light, aim);
                     for i in 0..m {
                         let mut rng = Rng::for_index(seed, Stream::CausticPhotons, i);
-                        let e = emit(&light, aim, &mut rng);
+                        let e = emitter.emit(&mut rng);
                         for (target, flux) in aim.iter().zip(&mut flux) {
                             let oc = e.origin - target.center;
                             let b = oc.dot(e.direction);
@@ -449,11 +486,12 @@ mod tests {
                 // Unaimed photons, counted against the same targets.
                 let plain = {
                     let mut flux = vec![Vec3::ZERO; aim.len()];
+                    let emitter = LightEmitter::new(&light, &[]);
                     for (k, target) in aim.iter().enumerate() {
                         let m = 1_000_000;
                         for i in 0..m {
                             let mut rng = Rng::for_index(4, Stream::CausticPhotons, i);
-                            let e = emit(&light, &[], &mut rng);
+                            let e = emitter.emit(&mut rng);
                             let oc = e.origin - target.center;
                             let b = oc.dot(e.direction);
                             let c = oc.length_squared() - target.radius * target.radius;
@@ -516,9 +554,10 @@ mod tests {
             radius: 0.3,
         }];
         let mut flux = None;
+        let emitter = LightEmitter::new(&light, &aim);
         for i in 0..10_000 {
             let mut rng = Rng::for_index(5, Stream::CausticPhotons, i);
-            let e = emit(&light, &aim, &mut rng);
+            let e = emitter.emit(&mut rng);
             let n = (e.origin - center) / radius;
             assert!((n.length() - 1.0).abs() < 1e-5, "origin off the sphere");
             assert!(e.direction.dot(n) >= -1e-6, "leaves inwards");

@@ -4,25 +4,24 @@
 //! photons, estimate radiance or know about images.
 
 pub mod aim;
+pub mod aim_grid;
 pub mod lights;
 
 use crate::embree::{self, EmbreeError};
 use crate::scene::{Light, Material, SceneDescription, Shape, TriangleMesh};
 use glam::Vec3;
 
-/// What an Embree geometry id stands for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum GeometryKind {
-    Mesh {
-        shape: usize,
-    },
+/// How a hit on one Embree geometry finds its normals: everything resolving a hit reads, in
+/// one place per geometry id (not a kind, then the scene's shape or light, then its normals).
+enum HitNormals {
+    /// A sphere, object or light: outward, (position − centre) / radius.
     Sphere {
-        shape: usize,
+        center: Vec3,
+        inverse_radius: f32,
     },
-    /// Visible geometry of an area light (`lights[light]`).
-    Emitter {
-        light: usize,
-    },
+    /// One normal for the whole geometry (a quad light's).
+    Fixed(Vec3),
+    Triangles(TriangleNormals),
 }
 
 /// What was hit: a surface with a material, or an area light.
@@ -74,6 +73,21 @@ impl TriangleNormals {
     }
 }
 
+fn sphere_normals(center: Vec3, radius: f32) -> HitNormals {
+    HitNormals::Sphere {
+        center,
+        inverse_radius: 1.0 / radius,
+    }
+}
+
+/// `v` brought to unit length by one Newton step on 1/|v|, for a `v` already close to it (a
+/// point on a sphere over its radius: off by Embree's hit error, up to about 2e-5, tested):
+/// the step squares that error, without the square root and division of normalising.
+#[inline(always)]
+fn unit_within_rounding(v: Vec3) -> Vec3 {
+    v * (1.5 - 0.5 * v.length_squared())
+}
+
 /// A bounding sphere, used to aim caustic photons at specular objects.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BoundingSphere {
@@ -113,11 +127,10 @@ impl ClosestHit {
 pub struct World {
     pub description: SceneDescription,
     accel: embree::Scene,
-    geometry: Vec<GeometryKind>,
     /// What each geometry id shows: its material, or the light it is.
     surfaces: Vec<Surface>,
-    /// The normals of every triangle, by geometry id (empty for spheres and lights).
-    triangle_normals: Vec<TriangleNormals>,
+    /// How each geometry id's hits find their normals.
+    normals: Vec<HitNormals>,
     /// Where caustic photons are aimed: a sphere around each mirror and glass object, or one
     /// around them all past [`aim::MAX_TARGETS`]; empty when the scene has none.
     pub caustic_targets: Vec<BoundingSphere>,
@@ -129,14 +142,13 @@ impl World {
     pub fn new(description: SceneDescription) -> Result<Self, EmbreeError> {
         let device = embree::Device::new()?;
         let mut builder = device.scene_builder()?;
-        let mut geometry = Vec::new();
         let mut surfaces = Vec::new();
-        let mut triangle_normals = Vec::new();
+        let mut normals = Vec::new();
         let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let mut specular_shapes = Vec::new();
-        for (i, shape) in description.shapes.iter().enumerate() {
-            let (kind, (a, b), material) = match shape {
+        for shape in &description.shapes {
+            let (hit_normals, (a, b), material) = match shape {
                 Shape::Sphere {
                     center,
                     radius,
@@ -145,7 +157,7 @@ impl World {
                     builder.add_spheres(&[(*center, *radius)])?;
                     let r = Vec3::splat(*radius);
                     (
-                        GeometryKind::Sphere { shape: i },
+                        sphere_normals(*center, *radius),
                         (*center - r, *center + r),
                         *material,
                     )
@@ -160,15 +172,12 @@ impl World {
                         .positions
                         .iter()
                         .fold(Vec3::splat(f32::MIN), |m, p| m.max(*p));
-                    (GeometryKind::Mesh { shape: i }, (a, b), mesh.material)
+                    let hit_normals = HitNormals::Triangles(TriangleNormals::new(mesh));
+                    (hit_normals, (a, b), mesh.material)
                 }
             };
-            geometry.push(kind);
             surfaces.push(Surface::Material(material));
-            triangle_normals.push(match shape {
-                Shape::Triangles(mesh) => TriangleNormals::new(mesh),
-                Shape::Sphere { .. } => TriangleNormals::Flat(Vec::new()),
-            });
+            normals.push(hit_normals);
             lo = lo.min(a);
             hi = hi.max(b);
             if !matches!(
@@ -189,6 +198,7 @@ impl World {
                 }
                 Light::Sphere { center, radius, .. } => {
                     builder.add_spheres(&[(*center, *radius)])?;
+                    normals.push(sphere_normals(*center, *radius));
                 }
                 Light::Quad {
                     corner,
@@ -203,11 +213,12 @@ impl World {
                         *corner + *edge_v,
                     ];
                     builder.add_triangles(&p, &[[0, 1, 2], [0, 2, 3]])?;
+                    normals.push(HitNormals::Fixed(
+                        edge_u.cross(*edge_v).normalize_or(Vec3::Z),
+                    ));
                 }
             }
-            geometry.push(GeometryKind::Emitter { light: i });
             surfaces.push(Surface::Light(i));
-            triangle_normals.push(TriangleNormals::Flat(Vec::new()));
         }
         let accel = builder.commit()?;
         let caustic_targets = if specular_shapes.len() > aim::MAX_TARGETS {
@@ -223,9 +234,8 @@ impl World {
         Ok(Self {
             description,
             accel,
-            geometry,
             surfaces,
-            triangle_normals,
+            normals,
             caustic_targets,
             scale,
         })
@@ -282,7 +292,7 @@ impl World {
     }
 
     /// Position and normals of a hit.
-    #[inline]
+    #[inline(always)]
     pub fn resolve(&self, closest: ClosestHit) -> Interaction {
         let ClosestHit {
             hit,
@@ -291,36 +301,24 @@ impl World {
             surface,
         } = closest;
         let position = origin + hit.t * dir;
-        let kind = self.geometry[hit.geometry as usize];
-        let (geometric_normal, shading_normal) = match kind {
-            GeometryKind::Sphere { shape } => {
-                let Shape::Sphere { center, .. } = &self.description.shapes[shape] else {
-                    unreachable!("geometry kinds follow the shapes")
-                };
-                let n = (position - *center).normalize_or(Vec3::Z);
+        let (geometric_normal, shading_normal) = match &self.normals[hit.geometry as usize] {
+            HitNormals::Sphere {
+                center,
+                inverse_radius,
+            } => {
+                let n = unit_within_rounding((position - *center) * *inverse_radius);
                 (n, n)
             }
-            GeometryKind::Mesh { .. } => {
-                let triangle = hit.primitive as usize;
-                match &self.triangle_normals[hit.geometry as usize] {
-                    TriangleNormals::Flat(normals) => (normals[triangle], normals[triangle]),
-                    TriangleNormals::Smooth(normals) => {
-                        let [ng, n0, n1, n2] = normals[triangle];
-                        let s = (1.0 - hit.u - hit.v) * n0 + hit.u * n1 + hit.v * n2;
-                        let s = s.normalize_or(ng);
-                        (ng, if s.dot(ng) < 0.0 { -s } else { s })
-                    }
-                }
-            }
-            GeometryKind::Emitter { light } => {
-                let n = match &self.description.lights[light] {
-                    Light::Sphere { center, .. } => (position - *center).normalize_or(Vec3::Z),
-                    Light::Quad { edge_u, edge_v, .. } => {
-                        edge_u.cross(*edge_v).normalize_or(Vec3::Z)
-                    }
-                    Light::Point { .. } => unreachable!("point lights have no geometry"),
-                };
+            HitNormals::Fixed(n) => (*n, *n),
+            HitNormals::Triangles(TriangleNormals::Flat(normals)) => {
+                let n = normals[hit.primitive as usize];
                 (n, n)
+            }
+            HitNormals::Triangles(TriangleNormals::Smooth(normals)) => {
+                let [ng, n0, n1, n2] = normals[hit.primitive as usize];
+                let s = (1.0 - hit.u - hit.v) * n0 + hit.u * n1 + hit.v * n2;
+                let s = s.normalize_or(ng);
+                (ng, if s.dot(ng) < 0.0 { -s } else { s })
             }
         };
         Interaction {
