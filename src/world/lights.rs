@@ -257,12 +257,9 @@ impl LightEmitter {
                     };
                 };
                 match grid.draw(s, t, origin, rng) {
-                    // flux = Φ cosθ / (π pdf_ω), as in `surface_emission`.
-                    CellDraw::Aimed(direction, weight) => Emission {
-                        origin,
-                        direction,
-                        flux: power * (direction.dot(normal).max(0.0) * weight / PI),
-                    },
+                    CellDraw::Aimed(direction, weight) => {
+                        lambertian_aimed(origin, normal, power, direction, weight)
+                    }
                     CellDraw::Nothing => Emission {
                         origin,
                         direction: normal,
@@ -307,8 +304,21 @@ fn surface_emission(
             flux: Vec3::ZERO,
         };
     }
-    // flux = L cosθ / (pdf_A pdf_ω) with L = Φ/(πA): Φ cosθ / (π pdf_ω).
     let (direction, weight) = cones.sample(rng);
+    lambertian_aimed(origin, normal, power, direction, weight)
+}
+
+/// A photon of a Lambertian area light sent along an aimed `direction` that stands for the
+/// solid angle `weight` (one over its density; area pdf already folded into `power`):
+/// flux = L cosθ / (pdf_A pdf_ω) with L = Φ/(πA), so Φ cosθ / (π pdf_ω).
+#[inline(always)]
+fn lambertian_aimed(
+    origin: Vec3,
+    normal: Vec3,
+    power: Vec3,
+    direction: Vec3,
+    weight: f32,
+) -> Emission {
     let cos = direction.dot(normal).max(0.0);
     Emission {
         origin,
