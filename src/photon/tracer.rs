@@ -308,9 +308,14 @@ pub fn trace_photons(
         } else {
             stored as f64 / emitted as f64
         };
-        let chunks: Vec<Chunk> = (0..(end - start).div_ceil(step))
+        let chunks: Vec<Chunk> = (0..(end - start).div_ceil(step) as usize)
             .into_par_iter()
+            // One chunk per task. Rayon's default split leaves runs of up to a quarter of the
+            // batch on one thread, which nothing can steal: the other thread idled through the
+            // last of them.
+            .with_max_len(1)
             .map(|c| {
+                let c = c as u64;
                 let paths = start + c * step..(start + (c + 1) * step).min(end);
                 let chunk = trace_chunk(&emitter, kind, paths, rate);
                 progress.inc(chunk.photons.len() as u64);
