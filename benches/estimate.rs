@@ -201,7 +201,10 @@ fn estimate(c: &mut Criterion) {
         else {
             unreachable!("diffusion settings resolve to the diffusion estimate")
         };
-        map.set_gradients(&compute_gradients(&map, d.gradient_radius()));
+        map.set_gradients(
+            &compute_gradients(&map, d.gradient_radius()),
+            d.gradient_radius(),
+        );
         group.bench_function(id("diffusion"), |b| {
             samples.time(b, &key("diffusion"), || {
                 batch(&map, &d, &queries, &mut scratch)

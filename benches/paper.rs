@@ -176,7 +176,7 @@ fn paper(c: &mut Criterion) {
             std::hint::black_box(two.install(|| compute_gradients(&map, radius)));
         })
     });
-    map.set_gradients(&two.install(|| compute_gradients(&map, radius)));
+    map.set_gradients(&two.install(|| compute_gradients(&map, radius)), radius);
     group.bench_function("diffusion_estimate_2_threads", |b| {
         estimate.time(b, || {
             std::hint::black_box(evaluate(&two, &grid, &map, &diffusion));

@@ -358,8 +358,82 @@ fn encode_exr(
     result.map_err(|e| e.to_string())
 }
 
+/// One named channel of a multi-channel EXR: full-resolution f32 samples, row 0 at the top.
+pub struct ExrChannel {
+    /// `R`, `G`, `B` for the main image; `layer.R` style names for the rest (OpenEXR's
+    /// convention, which pbrt-v4, Mitsuba and OpenImageIO read as layers).
+    pub name: String,
+    pub samples: Vec<f32>,
+}
+
+/// Writes a linear-float EXR with the given channels (each `width × height`), atomically.
+/// Non-finite samples are refused, as for every image.
+pub fn write_exr_channels(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: Vec<ExrChannel>,
+) -> Result<(), ImageError> {
+    use exr::prelude::{
+        AnyChannel, AnyChannels, Encoding, FlatSamples, Image as ExrImage, Layer, LayerAttributes,
+        SmallVec, WritableImage,
+    };
+    for c in &channels {
+        assert_eq!(c.samples.len(), width * height, "channel {}", c.name);
+        if let Some(i) = c.samples.iter().position(|v| !v.is_finite()) {
+            return Err(ImageError::NonFinite {
+                path: path.to_path_buf(),
+                x: i % width.max(1),
+                y: i / width.max(1),
+                value: Vec3::splat(c.samples[i]),
+                count: c.samples.iter().filter(|v| !v.is_finite()).count(),
+            });
+        }
+    }
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .into_iter()
+        .map(|c| AnyChannel::new(c.name.as_str(), FlatSamples::F32(c.samples)))
+        .collect();
+    let layer = Layer::new(
+        (width, height),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    write_atomically(path, |out| {
+        ExrImage::from_layer(layer)
+            .write()
+            .to_buffered(out)
+            .map_err(|e| e.to_string())
+    })
+}
+
 /// Reads a PFM file (colour "PF" or grey "Pf", either byte order) into an image with row 0 at
 /// the top.
+/// Reads a linear image: PFM, or the RGB channels of an EXR's first layer.
+pub fn read_image(path: &Path) -> Result<Image, ImageError> {
+    match ImageFormat::from_path(path)? {
+        ImageFormat::Exr => read_exr_rgb(path),
+        _ => read_pfm(path),
+    }
+}
+
+fn read_exr_rgb(path: &Path) -> Result<Image, ImageError> {
+    use exr::prelude::read_first_rgba_layer_from_file;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| Image::new(resolution.width(), resolution.height()),
+        |image: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            image.set(pos.x(), pos.y(), Vec3::new(r, g, b))
+        },
+    )
+    .map_err(|e| ImageError::Encode {
+        path: path.to_path_buf(),
+        message: format!("cannot read the EXR: {e}"),
+    })?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
 pub fn read_pfm(path: &Path) -> Result<Image, ImageError> {
     let mut bytes = Vec::new();
     File::open(path)

@@ -34,6 +34,10 @@ enum Command {
     /// and measure its error; writes a CSV and an error-against-time plot (SVG) and prints
     /// each estimate's Pareto front.
     Tradeoff(TradeoffArgs),
+    /// Combine films of disjoint pass ranges of one render (`dpm render --film`, from any
+    /// runs or machines) into one film and image; refuses overlapping passes and films of
+    /// another scene, seed or setting, and names the passes still missing.
+    Merge(dpm::render::merge::MergeArgs),
     /// Render a scene's reference caustic image (many more photons, a smaller radius) to a
     /// cache file, or report the cached one when the scene and settings are unchanged.
     Reference(ReferenceArgs),
@@ -65,7 +69,24 @@ fn main() -> ExitCode {
                 if !memory.is_empty() {
                     eprintln!("memory: {}", memory.join(", "));
                 }
-                eprintln!("wrote {}", outcome.output.display());
+                if let Some(note) = &outcome.budget_note {
+                    eprintln!("note: {note}");
+                }
+                let passes = outcome.film.passes();
+                eprintln!(
+                    "wrote {} ({} pass{}: {passes})",
+                    outcome.output.display(),
+                    passes.count(),
+                    if passes.count() == 1 { "" } else { "es" }
+                );
+                if outcome.interrupted {
+                    eprintln!(
+                        "interrupted: the output holds the {} complete pass{}",
+                        passes.count(),
+                        if passes.count() == 1 { "" } else { "es" }
+                    );
+                    return ExitCode::from(130);
+                }
                 ExitCode::SUCCESS
             }
             Err(e) => {
@@ -99,6 +120,25 @@ fn main() -> ExitCode {
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(e.exit_code())
+            }
+        },
+        Command::Merge(args) => match dpm::render::merge::run(&args) {
+            Ok(outcome) => {
+                if let Some(missing) = outcome.missing_text() {
+                    eprintln!("warning: {missing}");
+                }
+                eprintln!(
+                    "merged {} films: {} passes ({}); wrote {}",
+                    args.films.len(),
+                    outcome.film.passes().count(),
+                    outcome.film.passes(),
+                    args.output.display()
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(e.exit_code() as u8)
             }
         },
         Command::Reference(args) => match dpm::tradeoff::reference::run(&args) {

@@ -28,6 +28,38 @@ pub enum Stream {
     Distribution = 4,
 }
 
+/// The seed of pass `pass` of a progressive run. Pass 0 keeps the run's own seed, so a one-pass
+/// render traces the photons a one-shot render always did; every other pass is a fresh hash of
+/// (seed, pass), so pass `i` is the same whatever came before it or wherever it runs.
+pub fn pass_seed(seed: u64, pass: u64) -> u64 {
+    if pass == 0 {
+        seed
+    } else {
+        splitmix64(seed ^ splitmix64(pass ^ 0x7A55_0000_0000_0000))
+    }
+}
+
+/// The numbers of one camera path: its own stream, with the first light sample taken from the
+/// pixel's stratified sequence (see `render::camera`).
+#[derive(Clone, Debug)]
+pub struct PathSampler {
+    pub rng: Rng,
+    first_light: Option<(f32, f32)>,
+}
+
+impl PathSampler {
+    pub fn new(rng: Rng, first_light: Option<(f32, f32)>) -> Self {
+        Self { rng, first_light }
+    }
+
+    /// Two numbers for a light sample: the stratified pair the first time, then the stream.
+    pub fn light_2d(&mut self) -> (f32, f32) {
+        self.first_light
+            .take()
+            .unwrap_or_else(|| self.rng.next_2d())
+    }
+}
+
 /// The generators of one stream under one seed, with the per-stream hashing done once: photon
 /// tracing seeds a generator per path, millions of times.
 #[derive(Clone, Copy, Debug)]
@@ -231,6 +263,14 @@ pub fn cone_solid_angle(cos_max: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pass_zero_keeps_the_seed_and_other_passes_differ() {
+        assert_eq!(pass_seed(7, 0), 7);
+        let seeds: std::collections::HashSet<u64> = (0..1000).map(|p| pass_seed(7, p)).collect();
+        assert_eq!(seeds.len(), 1000);
+        assert_ne!(pass_seed(7, 1), pass_seed(8, 1));
+    }
 
     #[test]
     fn streams_and_indices_are_independent_and_repeatable() {

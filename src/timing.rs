@@ -40,6 +40,21 @@ impl PhaseTimes {
         });
     }
 
+    /// Adds `elapsed` and `counts` to the phase called `name` (made when missing): the phases
+    /// of a progressive render's passes add up into one row each.
+    pub fn accumulate(&mut self, name: &str, elapsed: Duration, counts: &[(&str, u64)]) {
+        let Some(p) = self.phases.iter_mut().find(|p| p.name == name) else {
+            return self.record(name, elapsed, counts);
+        };
+        p.seconds += elapsed.as_secs_f64();
+        for (k, v) in counts {
+            match p.counts.iter_mut().find(|(name, _)| name == k) {
+                Some((_, total)) => *total += v,
+                None => p.counts.push((k.to_string(), *v)),
+            }
+        }
+    }
+
     /// Adds counts to the most recent phase called `name`.
     pub fn add_counts(&mut self, name: &str, counts: &[(&str, u64)]) {
         if let Some(p) = self.phases.iter_mut().rev().find(|p| p.name == name) {
@@ -118,5 +133,10 @@ mod tests {
         assert!(table.contains("75.0%") && table.contains("25.0%"));
         assert!((t.total_seconds() - 2.0).abs() < 1e-9);
         assert!((t.seconds("render") - 0.5).abs() < 1e-9);
+        t.accumulate("render", Duration::from_millis(250), &[("pixels", 4)]);
+        t.accumulate("render", Duration::from_millis(250), &[("pixels", 6)]);
+        assert_eq!(t.phases.len(), 2);
+        assert!((t.seconds("render") - 1.0).abs() < 1e-9);
+        assert_eq!(t.phases[1].counts, vec![("pixels".to_string(), 10)]);
     }
 }

@@ -9,6 +9,7 @@ use dpm::estimate::{
     DiffusionEstimate, DiffusionKernel, DiffusivityUnits, FixedRadiusEstimate, Query, RadialKernel,
     RadianceEstimate, Scratch,
 };
+use dpm::photon::map::PackedGradients;
 use dpm::photon::{Photon, PhotonMap};
 use estimate_support::diffusion::*;
 use estimate_support::*;
@@ -351,11 +352,19 @@ fn gradient_pass_is_deterministic_and_prepare_reuses_it() {
     assert_eq!(serial, compute_gradients(&map, 0.5));
     assert!(serial.iter().any(|g| g.x.abs() > 0.0));
     gradient_pass(&mut map, 0.5);
-    let packed = dpm::photon::map::PackedGradients::pack(&serial);
+    let packed = PackedGradients::pack(&serial);
     assert_eq!(map.gradients(), Some(&packed));
     // prepare finds the gradients and leaves them (a caller may time the pass on its own).
-    with(1.0, |p| p.gradient_radius = 0.25).prepare(&mut map);
+    with(1.0, |p| p.gradient_radius = 0.5).prepare(&mut map);
     assert_eq!(map.gradients(), Some(&packed));
+    assert_eq!(map.gradient_radius(), Some(0.5));
+    // Gradients of another radius are never read: prepare takes them again at its own.
+    with(1.0, |p| p.gradient_radius = 0.25).prepare(&mut map);
+    assert_eq!(map.gradient_radius(), Some(0.25));
+    assert_eq!(
+        map.gradients(),
+        Some(&PackedGradients::pack(&compute_gradients(&map, 0.25)))
+    );
 }
 
 /// The photon-noise variance of the gradient (`gradient_noise`) matches the spread of the

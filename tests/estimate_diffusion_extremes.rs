@@ -47,7 +47,7 @@ fn stable_with_zero_gradient_everywhere() {
     // Gradients set to zero by hand (prepare must keep them): the estimate is isotropic.
     let d = with(1.0, |_| ());
     let mut map = PhotonMap::build(small_edge(5, 200.0, Vec3::ONE), 0);
-    map.set_gradients(&vec![Vec3::ZERO; map.len()]);
+    map.set_gradients(&vec![Vec3::ZERO; map.len()], d.gradient_radius());
     d.prepare(&mut map);
     let iso = FixedRadiusEstimate::new(RadialKernel::Epanechnikov, 1.0);
     for q in edge_queries() {

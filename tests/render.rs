@@ -10,7 +10,7 @@ use dpm::image_io::read_pfm;
 use dpm::render::PinholeCamera;
 use dpm::render::integrator::{Indirect, Integrator};
 use dpm::render::pipeline;
-use dpm::sampling::{Rng, Stream};
+use dpm::sampling::{PathSampler, Rng, Stream};
 use dpm::scene::Light;
 use dpm::world::World;
 use glam::DVec3;
@@ -51,10 +51,13 @@ fn diffuse_plane_under_a_point_light_has_the_analytic_radiance() {
     let half = 2.0; // the quad spans [-2, 2] in x and z at y = 0
 
     let (mut on_plane, mut off_plane, mut worst) = (0, 0, 0.0f64);
+    // The render's own sample positions (one sample per pixel, pass 0).
+    let samples = dpm::render::PassSamples::new(1, 0, 1);
     for y in 0..h {
         for x in 0..w {
             let o = dvec(camera.origin());
-            let d = dvec(camera.direction(x as f32 + 0.5, y as f32 + 0.5));
+            let (jx, jy) = samples.sample((y * w + x) as u64, 0).jitter;
+            let d = dvec(camera.direction(x as f32 + jx, y as f32 + jy));
             let got = dvec(image.get(x as usize, y as usize));
             let t = -o.y / d.y;
             let p = o + t * d;
@@ -216,10 +219,18 @@ fn whitted(world: &World, max_depth: u32) -> Integrator<'_> {
 }
 
 fn radiance_along(integrator: &Integrator, origin: DVec3, dir: DVec3) -> DVec3 {
-    let mut rng = Rng::for_index(1, Stream::Pixels, 0);
+    let mut sampler = PathSampler::new(Rng::for_index(1, Stream::Pixels, 0), None);
     let mut scratch = Scratch::default();
-    let l = integrator.radiance(origin.as_vec3(), dir.as_vec3(), 0, &mut rng, &mut scratch);
-    dvec(l)
+    let l = integrator.radiance(
+        origin.as_vec3(),
+        dir.as_vec3(),
+        0,
+        &mut sampler,
+        &mut scratch,
+    );
+    // Light reaches these pixels only straight from the emitter: all of it is direct.
+    assert_eq!(l.caustic + l.indirect, glam::Vec3::ZERO);
+    dvec(l.total())
 }
 
 /// Light seen through a glass sphere (ior 1.5): straight through the centre, the radiance is

@@ -21,9 +21,10 @@ pub use distribution::{Distribution, DistributionName, Truth};
 pub use grid::{Extent, Grid};
 pub use metrics::{Metrics, RegionWidths, Regions};
 
-use crate::estimate::{EstimateError, EstimatorSettings, ResolvedEstimator};
+use crate::estimate::{EstimateError, EstimatorFlags, ResolvedEstimator};
 use crate::image_io::{Image, ImageError, WriteOptions, write_atomically, write_image};
 use crate::photon::{Photon, PhotonMap};
+use crate::render::schedule::{Schedule, pass_estimator};
 use glam::{DVec2, Vec3};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -56,7 +57,7 @@ pub struct DensityArgs {
     )]
     pub extent: Extent,
     #[command(flatten)]
-    pub estimator: EstimatorSettings,
+    pub estimator: EstimatorFlags,
     /// Output image (.png, .exr or .pfm).
     #[arg(short = 'o', long, value_name = "OUT")]
     pub output: PathBuf,
@@ -86,6 +87,14 @@ pub struct DensityArgs {
     /// Distance from the border inside which metrics are not taken (world units).
     #[arg(long, default_value_t = 0.05)]
     pub margin: f64,
+    /// Progressive passes (built-in distributions only): each draws --count fresh photons from
+    /// its own stream and shrinks every radius by r²(i+1) = r²(i)·(i+α)/(i+1); the image is the
+    /// mean of the passes, and the report gives the error after 1, 2, 4, ... passes.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub passes: u64,
+    /// α of the progressive radius reduction, in (0, 1).
+    #[arg(long, default_value_t = crate::render::schedule::DEFAULT_ALPHA)]
+    pub ppm_alpha: f64,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -105,6 +114,8 @@ pub enum DensityError {
     KernelFieldNeedsDiffusion(String),
     #[error(transparent)]
     Image(#[from] ImageError),
+    #[error("{0}")]
+    Invalid(String),
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -127,6 +138,10 @@ pub struct DensityReport {
     pub regions: RegionWidths,
     pub seconds: Seconds,
     pub metrics: Option<Metrics>,
+    /// Passes averaged (1 for a one-shot estimate).
+    pub passes: u64,
+    /// With a known density: the metrics of the mean after 1, 2, 4, ... passes (and the last).
+    pub progression: Vec<(u64, Metrics)>,
 }
 
 impl std::fmt::Display for DensityReport {
@@ -144,6 +159,21 @@ impl std::fmt::Display for DensityReport {
                 ),
             ),
         ];
+        if self.passes > 1 {
+            rows.push(("passes", self.passes.to_string()));
+        }
+        for (n, m) in self.progression.iter().filter(|_| self.passes > 1) {
+            rows.push((
+                "after passes: RMSE / edge / flat / line",
+                format!(
+                    "{n:>5}: {:.4} / {:.4} / {:.4} / {}",
+                    m.rmse,
+                    m.edge_band_rmse,
+                    m.flat_noise,
+                    m.line_peak.map_or("-".into(), |l| format!("{l:.3}"))
+                ),
+            ));
+        }
         if let Some(m) = &self.metrics {
             rows.push((
                 "edge band / margin",
@@ -164,9 +194,14 @@ pub struct PhotonSource {
 
 /// Reads the photon file or draws the built-in distribution's photons.
 pub fn load_photons(args: &DensityArgs) -> Result<PhotonSource, DensityError> {
+    load_photons_with_seed(args, args.seed)
+}
+
+/// [`load_photons`], the built-in distribution drawn with `seed` (a pass's own seed).
+fn load_photons_with_seed(args: &DensityArgs, seed: u64) -> Result<PhotonSource, DensityError> {
     if let Some(name) = args.distribution {
         let distribution = Distribution::new(name, args.count);
-        let photons = distribution.photons(args.seed);
+        let photons = distribution.photons(seed);
         let name = format!("{name:?} distribution, seed {}", args.seed).to_lowercase();
         return Ok(PhotonSource {
             name,
@@ -242,31 +277,96 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
         margin: args.margin,
     };
 
-    let start = Instant::now();
-    let source = load_photons(args)?;
-    let photon_count = source.photons.len();
-    let emitted = photon_count as u64;
-    let mut map = PhotonMap::build(source.photons, emitted);
-    let photons_seconds = start.elapsed().as_secs_f64();
-
-    let start = Instant::now();
-    let resolved = args.estimator.resolve(&map)?;
-    if args.kernel_field.is_some() && !matches!(resolved, ResolvedEstimator::Diffusion(_)) {
-        return Err(DensityError::KernelFieldNeedsDiffusion(
-            resolved.to_string(),
+    if args.passes > 1 && args.distribution.is_none() {
+        return Err(DensityError::Invalid(
+            "--passes needs --distribution: a photon file cannot give fresh photons per pass"
+                .into(),
         ));
     }
-    let estimate = resolved.into_boxed();
-    estimate.prepare(&mut map);
-    let prepare_seconds = start.elapsed().as_secs_f64();
+    if !(args.ppm_alpha > 0.0 && args.ppm_alpha < 1.0) {
+        return Err(DensityError::Invalid(format!(
+            "--ppm-alpha {}: must be in (0, 1)",
+            args.ppm_alpha
+        )));
+    }
+    let settings = args.estimator.settings();
+    settings.validate()?;
+    let schedule = Schedule::new(args.ppm_alpha, args.seed);
+    let mut seconds = Seconds::default();
+    let mut sums = vec![glam::DVec3::ZERO; grid.width * grid.height];
+    let mut base_radius = settings.radius;
+    let mut resolved_first = None;
+    let mut last_map = None;
+    let mut progression = Vec::new();
+    let mut source_name = String::new();
+    let mut photon_count = 0;
+    let mut distribution = None;
+    let mut truth = None;
+    for pass in 0..args.passes {
+        let start = Instant::now();
+        let source = load_photons_with_seed(args, schedule.seed(pass))?;
+        photon_count = source.photons.len();
+        source_name = source.name;
+        if distribution.is_none() {
+            truth = source.distribution.as_ref().map(|d| d.truth_on(&grid));
+            distribution = source.distribution;
+        }
+        let emitted = photon_count as u64;
+        let mut map = PhotonMap::build(source.photons, emitted);
+        seconds.photons += start.elapsed().as_secs_f64();
 
-    let start = Instant::now();
-    let bar = grid::progress_bar(grid.height, estimate.name());
-    let pixels = grid::evaluate(&grid, &map, estimate.as_ref(), &bar);
-    let estimate_seconds = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        if pass == 0 && base_radius.is_none() {
+            base_radius = crate::estimate::settings::k_equivalent_radius(&map, settings.k);
+        }
+        let resolved = pass_estimator(&settings, base_radius, &schedule, pass).resolve(&map)?;
+        if args.kernel_field.is_some() && !matches!(resolved, ResolvedEstimator::Diffusion(_)) {
+            return Err(DensityError::KernelFieldNeedsDiffusion(
+                resolved.to_string(),
+            ));
+        }
+        resolved_first.get_or_insert(resolved);
+        let estimate = resolved.into_boxed();
+        estimate.prepare(&mut map);
+        seconds.prepare += start.elapsed().as_secs_f64();
+
+        let start = Instant::now();
+        let what = if args.passes > 1 {
+            format!("{} pass {}/{}", estimate.name(), pass + 1, args.passes)
+        } else {
+            estimate.name().to_string()
+        };
+        let bar = grid::progress_bar(grid.height, &what);
+        let pass_pixels = grid::evaluate(&grid, &map, estimate.as_ref(), &bar);
+        for (s, p) in sums.iter_mut().zip(&pass_pixels) {
+            *s += p.as_dvec3();
+        }
+        seconds.estimate += start.elapsed().as_secs_f64();
+        let done = pass + 1;
+        if let (Some(d), Some(t)) = (&distribution, &truth) {
+            if done.is_power_of_two() || done == args.passes {
+                let mean = mean_values(&sums, done);
+                progression.push((done, Metrics::new(&mean, t, &regions(d, &grid, widths))));
+            }
+        }
+        last_map = Some((map, resolved));
+    }
+    let passes = args.passes;
+    let resolved = resolved_first.expect("at least one pass");
+    let pixels: Vec<Vec3> = sums
+        .iter()
+        .map(|s| (*s / passes as f64).as_vec3())
+        .collect();
+    let (map, last_resolved) = last_map.expect("at least one pass");
+    let source = PhotonSource {
+        name: source_name,
+        photons: Vec::new(),
+        distribution,
+    };
+    let (photons_seconds, prepare_seconds, estimate_seconds) =
+        (seconds.photons, seconds.prepare, seconds.estimate);
 
     let values: Vec<f64> = pixels.iter().map(|p| channel_mean(*p)).collect();
-    let truth = source.distribution.as_ref().map(|d| d.truth_on(&grid));
     let metrics = source
         .distribution
         .as_ref()
@@ -298,7 +398,10 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
         let image = Image::from_grey(grid.width, grid.height, &grey);
         write_image(path, &image, &options)?;
     }
-    if let (Some(path), ResolvedEstimator::Diffusion(diffusion)) = (&args.kernel_field, resolved) {
+    // The kernel field of the last pass (at its radii).
+    if let (Some(path), ResolvedEstimator::Diffusion(diffusion)) =
+        (&args.kernel_field, last_resolved)
+    {
         let bar = grid::progress_bar(grid.height, "kernel field");
         let image = kernel_field::render(&grid, &map, &diffusion, &bar);
         write_image(path, &image, &WriteOptions::default())?;
@@ -314,7 +417,11 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     let report = DensityReport {
         source: source.name,
         photons: photon_count,
-        estimator: resolved.to_string(),
+        estimator: if passes > 1 {
+            format!("progressive {resolved} (pass 0), alpha={}", args.ppm_alpha)
+        } else {
+            resolved.to_string()
+        },
         width: grid.width,
         height: grid.height,
         extent: grid.extent,
@@ -325,12 +432,21 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
             estimate: estimate_seconds,
         },
         metrics,
+        passes,
+        progression,
     };
     if let Some(path) = &args.stats {
         let json = serde_json::to_string_pretty(&report).expect("the report serialises");
         write_text(path, &(json + "\n"))?;
     }
     Ok(report)
+}
+
+/// The channel means of `passes` passes' summed pixels.
+fn mean_values(sums: &[glam::DVec3], passes: u64) -> Vec<f64> {
+    sums.iter()
+        .map(|s| (s.x + s.y + s.z) / (3.0 * passes as f64))
+        .collect()
 }
 
 /// The mean of the RGB channels: the scalar the metrics and the CSV use.

@@ -19,6 +19,7 @@
 
 pub mod classic;
 pub mod diffusion;
+pub mod flags;
 pub mod kernel;
 pub mod settings;
 
@@ -26,6 +27,7 @@ pub use classic::{FixedRadiusEstimate, KnnEstimate};
 pub use diffusion::{
     DiffusionEstimate, DiffusionKernel, DiffusionParams, DiffusivityUnits, KernelShape,
 };
+pub use flags::EstimatorFlags;
 pub use kernel::RadialKernel;
 pub use settings::{EstimateError, EstimatorKind, EstimatorSettings, ResolvedEstimator};
 

@@ -1,7 +1,7 @@
-//! Estimator settings shared by `dpm render` and `dpm density` (a `clap::Args` struct to
-//! flatten into both), their validation, the defaults derived from the photon map, and the
-//! construction of the chosen estimate. Owns the command-line surface of the estimates; must
-//! not parse anything else or run queries beyond the few that derive a default radius.
+//! Estimator settings as plain, serialisable values (the command-line layer is
+//! [`super::flags`]), their validation, the defaults derived from the photon map, and the
+//! construction of the chosen estimate. Must not parse anything or run queries beyond the few
+//! that derive a default radius.
 
 use super::RadianceEstimate;
 use super::classic::{FixedRadiusEstimate, KnnEstimate};
@@ -11,7 +11,10 @@ use crate::photon::{Neighbours, PhotonMap};
 use std::fmt;
 
 /// Which radiance estimate to use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
 pub enum EstimatorKind {
     /// k nearest photons, constant kernel (Eq. 1).
     Simple,
@@ -41,95 +44,36 @@ pub enum EstimateError {
     DegenerateMap,
 }
 
-/// Radiance-estimate settings.
-#[derive(Clone, Debug, PartialEq, clap::Args)]
+/// Radiance-estimate settings, plain values: what a film records and a merge compares. The
+/// command-line layer with every flag's help is [`super::flags::EstimatorFlags`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
 pub struct EstimatorSettings {
-    /// Radiance estimate. `diffusion` is the paper's method; `cone` with k = 400 is the
-    /// paper's baseline; `simple`, `gaussian` (k-NN) and `epanechnikov` (fixed radius) are the
-    /// other classic estimates. Every k-NN estimate leaves the k-th photon out of its sum, so
-    /// all of them are unbiased on a uniform density.
-    #[arg(long, value_enum, default_value_t = EstimatorKind::Diffusion)]
+    /// Which estimate.
     pub estimator: EstimatorKind,
-
-    /// Photons per estimate for the k-NN estimates (the k-th sets the radius and is left out,
-    /// so k ≥ 2). For the fixed-radius estimates it sets the default --radius. 400 is the
-    /// paper's cone-filter setting, the baseline the diffusion estimate is compared with;
-    /// the diffusion estimate's flat regions are quieter with ~1000 (see --diffusivity).
-    #[arg(long, default_value_t = 400, allow_negative_numbers = true)]
+    /// Photons per k-NN estimate; sets the default radius of the fixed-radius ones.
     pub k: usize,
-
-    /// Support radius of the fixed-radius estimates (epanechnikov, diffusion), in scene units.
-    /// For the k-NN estimates it caps the search instead (default: no cap). Default for the
-    /// fixed-radius estimates: the k-equivalent radius, the median over up to 256 photons
-    /// spread through the map of the distance to their k-th nearest other photon, so a disc
-    /// holds about k photons where photons typically are.
-    #[arg(long, allow_negative_numbers = true)]
+    /// Fixed radius, or the k-NN search cap.
     pub radius: Option<f32>,
-
-    /// Slope constant of the cone filter (≥ 1; the weight is 1 − d/(slope·r)). 1.1 is
-    /// Jensen's suggestion; leaving the k-th photon out keeps every slope unbiased.
-    #[arg(long, default_value_t = 1.1, allow_negative_numbers = true)]
+    /// Slope constant of the cone filter.
     pub cone_slope: f64,
-
-    /// Radius of the diffusion estimate's gradient pass (Eq. 6). Default: radius/2 — small
-    /// enough that thin lines still show in the gradient (with radius itself they vanished in
-    /// the design notes' experiment), large enough to keep the gradient's noise down.
-    #[arg(long, allow_negative_numbers = true)]
+    /// Radius of the gradient pass (default radius/2).
     pub gradient_radius: Option<f32>,
-
-    /// Radius over which the diffusion estimate averages the structure tensor. Default:
-    /// radius, so one search serves both the tensor and the estimate.
-    #[arg(long, allow_negative_numbers = true)]
+    /// Radius of the structure tensor's average (default radius).
     pub smoothing_radius: Option<f32>,
-
-    /// Diffusivity coefficient K (Eq. 9): the edge contrast above which the kernel narrows
-    /// across the edge (≥ 0; 0 narrows it wherever there is any gradient, inf keeps it round).
-    /// In dimensionless units 0.2 means the irradiance changes by about √0.2 ≈ 45% of itself
-    /// over one radius; 0.2 kept edges and thin lines best in the design notes' experiment.
-    /// Noise alone reaches a contrast of about 64/N with N photons per disc (gradient radius
-    /// r/2), so flat regions stay round, with noise within ~1.1× of the isotropic estimate,
-    /// for N ≳ 1000; at N = 400 expect ~1.4×: raise --k or --radius, or K, if flat regions
-    /// look noisy.
-    #[arg(long, default_value_t = 0.2, allow_negative_numbers = true)]
+    /// Diffusivity coefficient K.
     pub diffusivity: f64,
-
-    /// Units of --diffusivity. `dimensionless` compares K with μ1·r²/L̂² (L̂: the isotropic
-    /// estimate at the point), which does not change with light power or scene scale, so one
-    /// K serves every scene; `absolute` compares it with μ1 in (W m⁻³)², as in the paper,
-    /// where K must be retuned whenever the power or the scale changes.
-    #[arg(long, value_enum, default_value_t = DiffusivityUnits::Dimensionless)]
+    /// Units of K.
     pub k_units: DiffusivityUnits,
-
-    /// Steepness α > 0 of the diffusivity function λ2 = 1/(1 + (contrast/K)^(1+α)). 1 gives a
-    /// gradual transition between flat regions and edges.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    /// Steepness of the diffusivity function.
     pub alpha: f64,
-
-    /// Eigenvalue λ3 of the diffusion tensor along the surface normal, in (0, 1]: the kernel
-    /// reaches r·√λ3 off the tangent plane. 0.1 is the paper's value (a disc rather than a
-    /// sphere, to limit bias in corners).
-    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
+    /// Eigenvalue along the normal.
     pub lambda3: f64,
-
-    /// Lower bound of λ2, in (0, 1]: the kernel is at least r·√floor wide across an edge.
-    /// 0.01 (a tenth of the radius) sharpened edges most in the design notes' experiment;
-    /// 0.05 lost a third of the gain there; without a bound the kernel degenerates to a
-    /// segment.
-    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
+    /// Lower bound of λ2.
     pub lambda2_floor: f64,
-
-    /// Photon noise removed from the structure tensor before the diffusivity: μ1 is reduced by
-    /// this many times the gradient variance that photon noise alone would give (computed from
-    /// the photons' Σ Φ² around the point). 0 is the paper's raw μ1, which reads noise as
-    /// structure and squeezes the kernel wherever photons are sparse (wormy flat regions);
-    /// 2 removes the noise's mean and its typical fluctuation after smoothing, and leaves edges,
-    /// whose μ1 is far above it, untouched.
-    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
+    /// Photon noise removed from μ1, in multiples of its variance.
     pub noise_floor: f64,
-
-    /// Kernel of the diffusion estimate, evaluated at the Mahalanobis distance. Epanechnikov
-    /// is the paper's choice and the cheapest; gaussian is Jensen's shape, exactly normalised.
-    #[arg(long, value_enum, default_value_t = DiffusionKernel::Epanechnikov)]
+    /// Kernel of the diffusion estimate.
     pub kernel: DiffusionKernel,
 }
 
@@ -353,109 +297,5 @@ impl EstimatorSettings {
     /// Validates, resolves the defaults against `map` and builds the estimate.
     pub fn build(&self, map: &PhotonMap) -> Result<Box<dyn RadianceEstimate>, EstimateError> {
         self.resolve(map).map(ResolvedEstimator::into_boxed)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use clap::Parser;
-
-    #[derive(Parser)]
-    struct Cli {
-        #[command(flatten)]
-        settings: EstimatorSettings,
-    }
-
-    fn parse(args: &[&str]) -> EstimatorSettings {
-        let mut all = vec!["dpm"];
-        all.extend_from_slice(args);
-        Cli::try_parse_from(all).expect("parses").settings
-    }
-
-    #[test]
-    fn command_line_is_well_formed_and_every_flag_has_help() {
-        use clap::CommandFactory;
-        let mut cmd = Cli::command();
-        cmd.clone().debug_assert();
-        let help = cmd.render_long_help().to_string();
-        for flag in [
-            "--estimator",
-            "--k",
-            "--radius",
-            "--cone-slope",
-            "--gradient-radius",
-            "--smoothing-radius",
-            "--diffusivity",
-            "--k-units",
-            "--alpha",
-            "--lambda3",
-            "--lambda2-floor",
-            "--kernel",
-        ] {
-            assert!(help.contains(flag), "{flag} missing from\n{help}");
-        }
-    }
-
-    #[test]
-    fn default_matches_the_command_line_defaults() {
-        assert_eq!(parse(&[]), EstimatorSettings::default());
-    }
-
-    #[test]
-    fn flags_parse() {
-        let s = parse(&[
-            "--estimator",
-            "cone",
-            "--k",
-            "50",
-            "--radius",
-            "0.5",
-            "--cone-slope",
-            "2",
-            "--k-units",
-            "absolute",
-            "--kernel",
-            "gaussian",
-            "--diffusivity",
-            "inf",
-        ]);
-        assert_eq!(s.estimator, EstimatorKind::Cone);
-        assert_eq!((s.k, s.radius, s.cone_slope), (50, Some(0.5), 2.0));
-        assert_eq!(s.k_units, DiffusivityUnits::Absolute);
-        assert_eq!(s.kernel, DiffusionKernel::Gaussian);
-        assert_eq!(s.diffusivity, f64::INFINITY);
-        assert!(s.validate().is_ok());
-    }
-
-    #[test]
-    fn bad_values_name_their_flag() {
-        let cases: &[(&[&str], &str)] = &[
-            (&["--k", "0"], "k"),
-            (&["--k", "1"], "k"),
-            (&["--radius", "0"], "radius"),
-            (&["--radius", "-1"], "radius"),
-            (&["--radius", "NaN"], "radius"),
-            (&["--radius", "inf"], "radius"),
-            (&["--gradient-radius", "0"], "gradient-radius"),
-            (&["--smoothing-radius", "-0.1"], "smoothing-radius"),
-            (&["--cone-slope", "0.9"], "cone-slope"),
-            (&["--diffusivity", "-0.2"], "diffusivity"),
-            (&["--diffusivity", "NaN"], "diffusivity"),
-            (&["--alpha", "0"], "alpha"),
-            (&["--alpha", "-1"], "alpha"),
-            (&["--lambda3", "0"], "lambda3"),
-            (&["--lambda3", "1.5"], "lambda3"),
-            (&["--lambda2-floor", "0"], "lambda2-floor"),
-        ];
-        for (args, flag) in cases {
-            let err = parse(args).validate().expect_err("invalid");
-            let EstimateError::InvalidSetting { flag: named, .. } = &err else {
-                panic!("{err}")
-            };
-            assert_eq!(named, flag, "{args:?}");
-            assert!(err.to_string().starts_with(&format!("--{flag} ")), "{err}");
-        }
-        assert!(parse(&["--diffusivity", "0"]).validate().is_ok());
     }
 }

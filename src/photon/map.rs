@@ -16,7 +16,8 @@ pub struct PhotonMap {
     tree: KdTree,
     /// Power, direction and normal of the photon in each tree slot.
     attributes: Vec<PhotonAttributes>,
-    gradients: Option<PackedGradients>,
+    /// The gradients and the gradient radius they were taken at.
+    gradients: Option<(PackedGradients, f32)>,
     /// Photon paths emitted from the lights to fill this map (for reporting and scaling).
     pub emitted: u64,
 }
@@ -83,13 +84,26 @@ impl PhotonMap {
     pub fn total_power(&self) -> Vec3 {
         self.attributes.iter().map(PhotonAttributes::power).sum()
     }
-    /// Stores the gradients (tree order, one per photon), packed to 7 bytes each.
-    pub fn set_gradients(&mut self, gradients: &[Vec3]) {
+    /// Stores the gradients (tree order, one per photon), packed to 7 bytes each, with the
+    /// gradient radius they were taken at: a progressive render shrinks that radius from pass
+    /// to pass, and an estimate must never read gradients of another radius.
+    pub fn set_gradients(&mut self, gradients: &[Vec3], radius: f32) {
         assert_eq!(gradients.len(), self.len());
-        self.gradients = Some(PackedGradients::pack(gradients));
+        self.gradients = Some((PackedGradients::pack(gradients), radius));
     }
     pub fn gradients(&self) -> Option<&PackedGradients> {
-        self.gradients.as_ref()
+        self.gradients.as_ref().map(|(g, _)| g)
+    }
+    /// The gradient radius of the stored gradients.
+    pub fn gradient_radius(&self) -> Option<f32> {
+        self.gradients.as_ref().map(|(_, r)| *r)
+    }
+    /// The gradients, if they were taken at exactly `radius`.
+    pub fn gradients_at(&self, radius: f32) -> Option<&PackedGradients> {
+        match &self.gradients {
+            Some((g, r)) if *r == radius => Some(g),
+            _ => None,
+        }
     }
     /// Heap bytes held per photon: the tree, the attributes and the gradients if present.
     pub fn bytes_per_photon(&self) -> f64 {
@@ -98,10 +112,7 @@ impl PhotonMap {
         }
         let bytes = self.tree.heap_bytes()
             + self.attributes.capacity() * size_of::<PhotonAttributes>()
-            + self
-                .gradients
-                .as_ref()
-                .map_or(0, PackedGradients::heap_bytes);
+            + self.gradients.as_ref().map_or(0, |(g, _)| g.heap_bytes());
         bytes as f64 / self.len() as f64
     }
 }
@@ -230,7 +241,7 @@ mod tests {
             .collect();
         let mut map = PhotonMap::build(photons.clone(), 10_000);
         let bare = map.bytes_per_photon();
-        map.set_gradients(&vec![Vec3::X; map.len()]);
+        map.set_gradients(&vec![Vec3::X; map.len()], 1.0);
         let with = map.bytes_per_photon();
         assert!(
             bare < 25.0 && with <= 32.0 && with - bare == 7.0,

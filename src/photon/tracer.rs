@@ -504,18 +504,8 @@ fn advance(
         return false;
     }
     let hit = world.resolve(closest);
-    // Normals facing the side the photon arrives from.
-    let entering = d.dot(hit.geometric_normal) < 0.0;
-    let ng = if entering {
-        hit.geometric_normal
-    } else {
-        -hit.geometric_normal
-    };
-    let ns = if entering {
-        hit.shading_normal
-    } else {
-        -hit.shading_normal
-    };
+    let entering = hit.entering(d);
+    let (ng, ns) = hit.facing(d);
     let next = match material {
         Material::Diffuse { albedo } => {
             let store = match kind {

@@ -1,17 +1,62 @@
 //! The eye pass's integrator: Whitted-style recursion through mirrors and glass (Fresnel, total
 //! internal reflection) to a depth limit; at diffuse surfaces direct light by shadow rays, the
 //! caustic map's estimate, and indirect light from the global map (final gathering, or the
-//! map shown directly). Owns shading; must not build maps or write images.
+//! map shown directly). Radiance comes back split into its direct, caustic and indirect parts,
+//! the film's layers. Knows nothing of passes or pixels: a camera path brings its own
+//! [`PathSampler`]. Owns shading; must not build maps or write images.
 
 use crate::estimate::{Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
-use crate::sampling::{Rng, cosine_hemisphere};
+use crate::sampling::{PathSampler, cosine_hemisphere};
 use crate::scene::Material;
 use crate::world::lights::{emitted_radiance, sample_incident};
-use crate::world::{Interaction, Surface, World};
+use crate::world::{Surface, World};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
+
+/// Radiance along a camera path, by where the light last came from before the eye path's
+/// diffuse hit: emitters and shadow rays (direct), the caustic map, the global map (indirect).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Radiance {
+    pub direct: Vec3,
+    pub caustic: Vec3,
+    pub indirect: Vec3,
+}
+
+impl Radiance {
+    pub fn total(&self) -> Vec3 {
+        self.direct + self.caustic + self.indirect
+    }
+}
+
+impl std::ops::Add for Radiance {
+    type Output = Radiance;
+    fn add(self, o: Radiance) -> Radiance {
+        Radiance {
+            direct: self.direct + o.direct,
+            caustic: self.caustic + o.caustic,
+            indirect: self.indirect + o.indirect,
+        }
+    }
+}
+
+impl std::ops::AddAssign for Radiance {
+    fn add_assign(&mut self, o: Radiance) {
+        *self = *self + o;
+    }
+}
+
+impl std::ops::Mul<Radiance> for f32 {
+    type Output = Radiance;
+    fn mul(self, r: Radiance) -> Radiance {
+        Radiance {
+            direct: self * r.direct,
+            caustic: self * r.caustic,
+            indirect: self * r.indirect,
+        }
+    }
+}
 
 /// A photon map with the estimate that reads it.
 pub struct EstimatedMap<'a> {
@@ -56,58 +101,76 @@ impl Integrator<'_> {
         origin: Vec3,
         dir: Vec3,
         depth: u32,
-        rng: &mut Rng,
+        sampler: &mut PathSampler,
         scratch: &mut Scratch,
-    ) -> Vec3 {
+    ) -> Radiance {
         let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-            return Vec3::ZERO;
+            return Radiance::default();
         };
         let m = match hit.surface {
             Surface::Light(l) => {
                 let light = &self.world.description.lights[l];
-                return emitted_radiance(light, -dir.dot(hit.geometric_normal));
+                return Radiance {
+                    direct: emitted_radiance(light, -dir.dot(hit.geometric_normal)),
+                    ..Radiance::default()
+                };
             }
             Surface::Material(m) => m,
         };
-        let (ng, ns) = facing(&hit, dir);
+        let (ng, ns) = hit.facing(dir);
         match self.world.material(m) {
             Material::Diffuse { albedo } => {
                 let p = self.offset(hit.position, ng);
-                let mut irradiance = self.direct(p, ns, rng);
                 let query = Query {
                     position: hit.position,
                     normal: ns,
                 };
-                if let Some(c) = &self.caustics {
-                    irradiance += c.irradiance(&query, scratch);
+                let brdf = *albedo * FRAC_1_PI;
+                let caustic = match &self.caustics {
+                    Some(c) => brdf * c.irradiance(&query, scratch),
+                    None => Vec3::ZERO,
+                };
+                Radiance {
+                    direct: brdf * self.direct(p, ns, sampler),
+                    caustic,
+                    indirect: *albedo * self.indirect(p, ns, &query, sampler, scratch),
                 }
-                let reflected = *albedo * FRAC_1_PI * irradiance;
-                reflected + *albedo * self.indirect(p, ns, &query, rng, scratch)
             }
             Material::Mirror if depth < self.max_depth => {
                 let r = reflect(dir, ns);
-                self.radiance(self.spawn(hit.position, ng, r), r, depth + 1, rng, scratch)
+                self.radiance(
+                    self.spawn(hit.position, ng, r),
+                    r,
+                    depth + 1,
+                    sampler,
+                    scratch,
+                )
             }
             Material::Glass { ior } if depth < self.max_depth => {
-                let entering = dir.dot(hit.geometric_normal) < 0.0;
+                let entering = hit.entering(dir);
                 let eta = if entering { 1.0 / ior } else { *ior };
                 let f = fresnel_dielectric(-dir.dot(ns), eta);
                 let r = reflect(dir, ns);
-                let mut l =
-                    f * self.radiance(self.spawn(hit.position, ng, r), r, depth + 1, rng, scratch);
+                let mut l = f * self.radiance(
+                    self.spawn(hit.position, ng, r),
+                    r,
+                    depth + 1,
+                    sampler,
+                    scratch,
+                );
                 if let Some(t) = refract(dir, ns, eta).filter(|_| f < 1.0) {
                     l += (1.0 - f)
                         * self.radiance(
                             self.spawn(hit.position, ng, t),
                             t,
                             depth + 1,
-                            rng,
+                            sampler,
                             scratch,
                         );
                 }
                 l
             }
-            _ => Vec3::ZERO,
+            _ => Radiance::default(),
         }
     }
 
@@ -121,10 +184,10 @@ impl Integrator<'_> {
     }
 
     /// Direct irradiance at `p` with normal `n`: one shadow-tested sample per light.
-    fn direct(&self, p: Vec3, n: Vec3, rng: &mut Rng) -> Vec3 {
+    fn direct(&self, p: Vec3, n: Vec3, sampler: &mut PathSampler) -> Vec3 {
         let mut e = Vec3::ZERO;
         for light in &self.world.description.lights {
-            let Some(s) = sample_incident(light, p, rng) else {
+            let Some(s) = sample_incident(light, p, sampler.light_2d()) else {
                 continue;
             };
             let cos = n.dot(s.direction);
@@ -146,9 +209,10 @@ impl Integrator<'_> {
         p: Vec3,
         n: Vec3,
         query: &Query,
-        rng: &mut Rng,
+        sampler: &mut PathSampler,
         scratch: &mut Scratch,
     ) -> Vec3 {
+        let rng = &mut sampler.rng;
         match &self.indirect {
             Indirect::None => Vec3::ZERO,
             Indirect::Visualize(g) => g.irradiance(query, scratch) * FRAC_1_PI,
@@ -170,7 +234,7 @@ impl Integrator<'_> {
         map: &EstimatedMap,
         mut o: Vec3,
         mut d: Vec3,
-        rng: &mut Rng,
+        rng: &mut crate::sampling::Rng,
         scratch: &mut Scratch,
     ) -> Vec3 {
         for _ in 0..=GATHER_SPECULAR_DEPTH {
@@ -181,7 +245,7 @@ impl Integrator<'_> {
             let Surface::Material(m) = hit.surface else {
                 break;
             };
-            let (ng, ns) = facing(&hit, d);
+            let (ng, ns) = hit.facing(d);
             let next = match self.world.material(m) {
                 Material::Diffuse { albedo } => {
                     let q = Query {
@@ -192,11 +256,7 @@ impl Integrator<'_> {
                 }
                 Material::Mirror => reflect(d, ns),
                 Material::Glass { ior } => {
-                    let eta = if d.dot(hit.geometric_normal) < 0.0 {
-                        1.0 / ior
-                    } else {
-                        *ior
-                    };
+                    let eta = if hit.entering(d) { 1.0 / ior } else { *ior };
                     scatter_dielectric(d, ns, eta, rng.next_f32())
                 }
             };
@@ -204,14 +264,5 @@ impl Integrator<'_> {
             d = next;
         }
         Vec3::ZERO
-    }
-}
-
-/// Geometric and shading normals turned towards the side `dir` arrives from.
-fn facing(hit: &Interaction, dir: Vec3) -> (Vec3, Vec3) {
-    if dir.dot(hit.geometric_normal) < 0.0 {
-        (hit.geometric_normal, hit.shading_normal)
-    } else {
-        (-hit.geometric_normal, -hit.shading_normal)
     }
 }

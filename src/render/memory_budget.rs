@@ -5,7 +5,7 @@
 //! The per-photon figure bounds the peak while a map is traced and built; BENCHMARKS.md has the
 //! measured peak.
 
-use super::pipeline::{RenderArgs, RenderError};
+use super::pipeline::RenderError;
 use crate::estimate::settings::EstimatorKind;
 use crate::photon::store::MapInfo;
 use crate::photon::tracer::MapKind;
@@ -18,8 +18,9 @@ pub const BYTES_PER_PHOTON: u64 = 20 + 16 + 48;
 /// Extra bytes a caustic photon costs with the diffusion estimate: its packed gradient (7) and
 /// the gradient pass's node sums and unpacked result while it runs.
 pub const GRADIENT_BYTES: u64 = 12;
-/// Bytes a pixel costs: the linear image, its checked copy and the encoded file in memory.
-pub const BYTES_PER_PIXEL: u64 = 40;
+/// Bytes a pixel costs: the film's f64 sums (15 channels), one pass's f32 values, the resolved
+/// image, its checked copy and the encoded file in memory.
+pub const BYTES_PER_PIXEL: u64 = 240;
 /// What is assumed available when /proc/meminfo cannot be read.
 pub const FALLBACK_MEMORY: u64 = 16 << 30;
 
@@ -76,12 +77,12 @@ pub fn human_bytes(bytes: u64) -> String {
 /// Refuses, before anything is allocated, photon counts (and an image size) that would not
 /// fit in memory.
 pub(super) fn check_memory(
-    args: &RenderArgs,
+    estimator: EstimatorKind,
     world: &World,
     wanted: &[MapInfo],
 ) -> Result<(), RenderError> {
     let camera = &world.description.camera;
-    let diffusion = args.estimate.estimator == EstimatorKind::Diffusion;
+    let diffusion = estimator == EstimatorKind::Diffusion;
     let needed = memory_estimate(wanted, diffusion, camera.width, camera.height);
     let (available, source) = available_memory();
     if needed <= available {

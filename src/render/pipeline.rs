@@ -1,29 +1,33 @@
-//! One whole render, as the data flows: scene file → Embree world → photon maps (only those
-//! the scene and the chosen render need) → estimate preparation (the diffusion estimate's
-//! gradient pass, timed as its own phase) → eye pass → image file, with progress bars and a
-//! per-phase timing table. Owns the `dpm render` options; must not implement any stage itself.
+//! `dpm render` from the command line to the files: the flags, then the pass loop. Scene file →
+//! Embree world → for each pass ([`super::pass`]: its maps, its estimates, its pixels) → the
+//! [`Film`] → `-o`, `--film` and the kernel field, rewritten atomically as passes complete,
+//! with a progress bar over the passes and a per-phase timing table at the end. Owns the flags,
+//! the pass budget (`--passes`, `--time`), resuming and writing; must not implement any stage.
+//!
+//! The loop: passes run from the first (`--first-pass`, or the end of a `--resume`d film) for
+//! `--passes` passes, or while the time budget lasts: a pass whose predicted time (the mean of
+//! this run's pass times) would overrun `--time` is not started, though the first pass always
+//! runs. Ctrl-C ends the current pass unfinished and writes the film of the complete ones.
 
-use super::integrator::{EstimatedMap, Indirect, Integrator};
+use super::camera::PinholeCamera;
+use super::film::{Film, FilmHeader};
+use super::film_file::{self, FilmFileError};
 use super::memory_budget::check_memory;
-use super::{PinholeCamera, render_image};
+use super::output::{write_film_image, write_kernel_field};
+use super::pass::{BaseRadii, PassContext, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
+use super::schedule::{DEFAULT_ALPHA, MAX_PASSES, Schedule};
 use crate::embree::{self, EmbreeError};
-use crate::estimate::RadianceEstimate;
-use crate::estimate::classic::KnnEstimate;
-use crate::estimate::diffusion::gradient_pass;
-use crate::estimate::kernel::RadialKernel;
-use crate::estimate::settings::{
-    EstimateError, EstimatorKind, EstimatorSettings, ResolvedEstimator,
-};
-use crate::image_io::{self, Image, ImageError, ImageFormat, WriteOptions};
-use crate::photon::PhotonMap;
+use crate::estimate::EstimatorFlags;
+use crate::estimate::settings::{EstimateError, EstimatorKind};
+use crate::image_io::{self, Image, ImageError, ImageFormat};
 use crate::photon::store::{self, MapInfo, StoreError};
-use crate::photon::tracer::{MapKind, TraceCounts, trace_map};
+use crate::photon::tracer::{MapKind, TraceCounts};
 use crate::scene::{self, Material, SceneError};
 use crate::timing::{PhaseTimes, progress};
 use crate::world::World;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 #[derive(Clone, Debug, clap::Args)]
 pub struct RenderArgs {
@@ -31,7 +35,9 @@ pub struct RenderArgs {
     pub scene: PathBuf,
 
     /// Output image; the format follows the extension: .png (tone-mapped sRGB), .exr (linear
-    /// float RGB), .pfm (linear float RGB). Written atomically. Default: the scene's name with .png.
+    /// float RGB, with direct, caustic and indirect layers and, with the diffusion estimate,
+    /// the kernel field), .pfm (linear float RGB). Rewritten atomically as passes complete.
+    /// Default: the scene's name with .png.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
 
@@ -39,11 +45,57 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub threads: usize,
 
-    /// Seed of every random number (photon paths and pixel samples).
+    /// Seed of every random number (photon paths and pixel samples of every pass).
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
 
-    /// Samples per pixel: the first goes through the pixel centre, the rest are jittered.
+    /// Progressive passes to render. Each traces fresh photons, shrinks every radius by
+    /// r²(i+1) = r²(i)·(i+α)/(i+1) and renders fresh pixel samples; the image is their mean,
+    /// and converges as passes accumulate. With --time: at most this many.
+    #[arg(long, allow_negative_numbers = true)]
+    pub passes: Option<u64>,
+
+    /// Wall-clock budget in seconds: passes run until the next one (predicted from the mean
+    /// pass time so far) would overrun it. The first pass always runs.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    pub time: Option<f64>,
+
+    /// Index of the first pass (passes are the same whichever run renders them, so ranges
+    /// rendered apart can be merged with `dpm merge`).
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
+    pub first_pass: u64,
+
+    /// α of the progressive radius reduction, in (0, 1) (Knaus and Zwicker: 2/3).
+    #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
+    pub ppm_alpha: f64,
+
+    /// Save the film (per-pixel sums of every pass, with the scene's hash, seed and settings)
+    /// to FILE after every pass, atomically: `--resume FILE` continues it, `dpm merge` combines it.
+    #[arg(long, value_name = "FILE")]
+    pub film: Option<PathBuf>,
+
+    /// Continue the film in FILE (same scene, seed and settings): passes start where it ends.
+    /// It is rewritten there unless --film names another file.
+    #[arg(long, value_name = "FILE")]
+    pub resume: Option<PathBuf>,
+
+    /// Rewrite -o (and --film) at most every this many seconds (0: after every pass); the
+    /// last pass is always written.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub write_every: f64,
+
+    /// A reference image (.pfm or .exr, same resolution) to report the error against after
+    /// every pass (relative MSE, in the progress bar and --stats).
+    #[arg(long, value_name = "IMAGE")]
+    pub reference: Option<PathBuf>,
+
+    /// Camera samples per pixel in each pass, stratified within the pixel across samples and
+    /// passes (one Owen-scrambled Sobol sequence per pixel).
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub spp: u32,
 
@@ -55,15 +107,15 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
     pub max_depth: u32,
 
-    /// Photons STORED in the caustic map (light → specular+ → diffuse); paths are emitted until
-    /// this many are stored. Only built when the scene has a mirror or glass object; 0 turns
-    /// caustics off.
+    /// Photons STORED in each pass's caustic map (light → specular+ → diffuse); paths are
+    /// emitted until this many are stored. Only built when the scene has a mirror or glass
+    /// object; 0 turns caustics off.
     #[arg(long, default_value_t = 1_000_000, allow_negative_numbers = true)]
     pub caustic_photons: usize,
 
-    /// Photons STORED in the global map (indirect diffuse light). Default: 200000 when the scene
-    /// has two or more diffuse objects (so diffuse light can bounce between them), else 0 (no
-    /// global map: a lone plane cannot light itself).
+    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 200000 when
+    /// the scene has two or more diffuse objects (so diffuse light can bounce between them),
+    /// else 0 (no global map: a lone plane cannot light itself).
     #[arg(long, allow_negative_numbers = true)]
     pub global_photons: Option<usize>,
 
@@ -78,25 +130,28 @@ pub struct RenderArgs {
 
     /// Caustic radiance estimate.
     #[command(flatten)]
-    pub estimate: EstimatorSettings,
+    pub estimate: EstimatorFlags,
 
     /// Also write the diffusion kernel's shape at each pixel's first diffuse hit (hue = edge
-    /// direction, brightness = 1 − λ2), like the paper's Figure 2b. Needs --estimator diffusion.
+    /// direction, brightness = 1 − λ2, averaged over passes), like the paper's Figure 2b.
+    /// Needs --estimator diffusion.
     #[arg(long)]
     pub kernel_field: Option<PathBuf>,
 
-    /// Write the per-phase times and counts as JSON.
+    /// Write the per-phase times, counts and per-pass errors as JSON.
     #[arg(long)]
     pub stats: Option<PathBuf>,
 
-    /// Save the photon maps to FILE (versioned binary with a checksum, written atomically)
-    /// right after tracing, so a later render can skip tracing with --load-photons.
+    /// Save pass 0's photon maps to FILE (versioned binary with a checksum, written
+    /// atomically) right after tracing, so a later one-pass render can skip tracing with
+    /// --load-photons.
     #[arg(long, value_name = "FILE")]
     pub save_photons: Option<PathBuf>,
 
-    /// Load the photon maps from FILE (made by --save-photons) instead of tracing them. The
-    /// file must come from the same scene (lights, materials, geometry), --seed and photon
-    /// counts; the image is then identical to one from freshly traced maps.
+    /// Load the photon maps from FILE (made by --save-photons) instead of tracing them, for a
+    /// one-pass render. The file must come from the same scene (lights, materials,
+    /// geometry), --seed and photon counts; the image is then identical to one from freshly
+    /// traced maps.
     #[arg(long, value_name = "FILE")]
     pub load_photons: Option<PathBuf>,
 }
@@ -120,8 +175,10 @@ pub enum RenderError {
     },
     #[error("{0}")]
     Photons(#[from] StoreError),
+    #[error("{0}")]
+    Film(#[from] FilmFileError),
     #[error(
-        "interrupted; {} was not written{}",
+        "interrupted; {} was not written (no pass was complete){}",
         output.display(),
         saved_photons.as_ref().map(|p| format!(
             " (the photon maps were saved to {}; reuse them with --load-photons)",
@@ -141,27 +198,46 @@ impl RenderError {
             RenderError::Embree(_) | RenderError::Io { .. } => 1,
             RenderError::Image(ImageError::Io { .. } | ImageError::Encode { .. }) => 1,
             RenderError::Photons(e) => e.exit_code(),
+            RenderError::Film(e) => e.exit_code(),
             RenderError::Interrupted { .. } => 130,
             _ => 2,
         }
     }
 }
 
+/// One pass's line in the report: its time and, with --reference, the film's error after it.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PassRecord {
+    pub pass: u64,
+    pub seconds: f64,
+    /// Seconds since the run started, when this pass was complete.
+    pub elapsed: f64,
+    pub relative_mse: Option<f64>,
+}
+
 /// What a render produced.
 pub struct RenderOutcome {
     pub image: Image,
+    pub film: Film,
     pub output: PathBuf,
     pub times: PhaseTimes,
+    /// The last pass's maps.
     pub caustic: Option<TraceCounts>,
     /// Heap bytes per stored photon of the caustic map, its gradients included when made.
     pub caustic_bytes_per_photon: Option<f64>,
     pub global: Option<TraceCounts>,
+    /// The last pass's caustic estimate, every number resolved.
     pub estimator: Option<String>,
+    pub passes: Vec<PassRecord>,
+    /// Ctrl-C stopped the run; the film holds the passes completed before it.
+    pub interrupted: bool,
+    /// The budget could not hold even one pass (it ran anyway).
+    pub budget_note: Option<String>,
 }
 
 /// Checks the options that need no scene, before any work is done.
 pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
-    args.estimate.validate()?;
+    args.estimate.settings().validate()?;
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default();
         PathBuf::from(stem).with_extension("png")
@@ -174,24 +250,67 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
         }
         .into());
     }
+    let invalid = |m: String| Err(RenderError::Invalid(m));
     if args.spp == 0 {
-        return Err(RenderError::Invalid(
-            "--spp 0: at least one sample per pixel".into(),
-        ));
+        return invalid("--spp 0: at least one sample per pixel".into());
     }
     if let Some(path) = &args.kernel_field {
         if args.estimate.estimator != EstimatorKind::Diffusion {
-            return Err(RenderError::Invalid(
-                "--kernel-field needs --estimator diffusion".into(),
-            ));
+            return invalid("--kernel-field needs --estimator diffusion".into());
         }
         ImageFormat::from_path(path)?;
     }
     if args.global_k < 2 {
-        return Err(RenderError::Invalid(format!(
-            "--global-k {}: must be at least 2",
-            args.global_k
-        )));
+        return invalid(format!("--global-k {}: must be at least 2", args.global_k));
+    }
+    if args.passes == Some(0) {
+        return invalid("--passes 0: at least one pass".into());
+    }
+    if let Some(t) = args.time.filter(|t| !(t.is_finite() && *t > 0.0)) {
+        return invalid(format!("--time {t}: must be a positive number of seconds"));
+    }
+    if !(args.write_every.is_finite() && args.write_every >= 0.0) {
+        return invalid(format!(
+            "--write-every {}: must be zero or a positive number of seconds",
+            args.write_every
+        ));
+    }
+    if !(args.ppm_alpha > 0.0 && args.ppm_alpha < 1.0) {
+        return invalid(format!("--ppm-alpha {}: must be in (0, 1)", args.ppm_alpha));
+    }
+    let last = args
+        .first_pass
+        .checked_add(args.passes.unwrap_or(1))
+        .filter(|l| *l <= MAX_PASSES);
+    if last.is_none() {
+        return invalid(format!(
+            "--first-pass {} with --passes {}: a render holds at most {MAX_PASSES} passes",
+            args.first_pass,
+            args.passes.unwrap_or(1)
+        ));
+    }
+    if args.resume.is_some() && args.first_pass != 0 {
+        return invalid("--resume continues where its film ends; drop --first-pass".into());
+    }
+    let one_pass = args.passes.unwrap_or(1) == 1 && args.time.is_none() && args.first_pass == 0;
+    if (args.load_photons.is_some() || args.save_photons.is_some()) && !one_pass {
+        return invalid(
+            "--save-photons and --load-photons hold one pass's maps: use them with one pass \
+             (no --passes, --time or --first-pass)"
+                .into(),
+        );
+    }
+    for (flag, path) in [("--film", &args.film), ("--resume", &args.resume)] {
+        if let Some(p) = path {
+            if p == &output {
+                return invalid(format!("{flag} {}: is also the output image", p.display()));
+            }
+        }
+    }
+    if let Some(path) = &args.resume {
+        if !path.is_file() {
+            return invalid(format!("--resume {}: does not exist", path.display()));
+        }
     }
     validate_photon_files(args, &output)?;
     Ok(output)
@@ -204,14 +323,8 @@ pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
     pool.install(|| run_in_pool(args, output))
 }
 
-fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, RenderError> {
-    embree::enable_flush_to_zero();
-    let mut times = PhaseTimes::new();
-    let (description, report) =
-        times.time("load scene", || scene::load_with_report(&args.scene))?;
-    report_load(args, &report, &mut times);
-    let world = times.time("build Embree scene", || World::new(description))?;
-
+/// The settings every pass of this render uses.
+fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let diffuse_objects = world
         .description
         .shapes
@@ -224,156 +337,332 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
             matches!(world.material(m), Material::Diffuse { .. })
         })
         .count();
-    let global_target =
-        args.global_photons
-            .unwrap_or(if diffuse_objects >= 2 { 200_000 } else { 0 });
-
-    let (caustic, global, saved_photons) =
-        photon_maps(args, &world, global_target, &output, &mut times)?;
-    let stop_if_interrupted = || -> Result<(), RenderError> {
-        if crate::interrupt::requested() {
-            return Err(RenderError::Interrupted {
-                output: output.clone(),
-                saved_photons: saved_photons.clone(),
-            });
-        }
-        Ok(())
-    };
-
-    // The caustic estimate; the diffusion estimate's gradient pass is its own phase.
-    let mut caustic_map = caustic;
-    let mut estimator = None;
-    let mut diffusion = None;
-    let caustic_estimate: Option<Box<dyn RadianceEstimate>> = match caustic_map.as_mut() {
-        Some((map, _)) if !map.is_empty() => {
-            let resolved = args.estimate.resolve(map)?;
-            estimator = Some(resolved.to_string());
-            if let (EstimatorKind::Diffusion, ResolvedEstimator::Diffusion(d)) =
-                (args.estimate.estimator, &resolved)
-            {
-                let start = Instant::now();
-                gradient_pass(map, d.gradient_radius());
-                diffusion = Some(*d);
-                times.record(
-                    "gradient pass",
-                    start.elapsed(),
-                    &[("photons", map.len() as u64)],
-                );
-            }
-            let estimate = resolved.into_boxed();
-            estimate.prepare(map);
-            Some(estimate)
-        }
-        _ => None,
-    };
-    stop_if_interrupted()?;
-    let global_estimate = KnnEstimate::new(RadialKernel::Constant, args.global_k, None);
-
-    let integrator = Integrator {
-        world: &world,
-        caustics: match (&caustic_map, &caustic_estimate) {
-            (Some((map, _)), Some(e)) => Some(EstimatedMap {
-                map,
-                estimate: e.as_ref(),
-            }),
-            _ => None,
-        },
-        indirect: match &global {
-            Some((map, _)) if !map.is_empty() => {
-                let m = EstimatedMap {
-                    map,
-                    estimate: &global_estimate,
-                };
-                if args.final_gather > 0 {
-                    Indirect::FinalGather {
-                        map: m,
-                        rays: args.final_gather,
-                    }
-                } else {
-                    Indirect::Visualize(m)
-                }
-            }
-            _ => Indirect::None,
-        },
+    RenderSettings {
+        caustic_photons: args.caustic_photons,
+        global_photons: args.global_photons.unwrap_or(if diffuse_objects >= 2 {
+            200_000
+        } else {
+            0
+        }),
+        spp: args.spp,
         max_depth: args.max_depth,
+        final_gather: args.final_gather,
+        global_k: args.global_k,
+        alpha: args.ppm_alpha,
+        estimator: args.estimate.settings(),
+    }
+}
+
+fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, RenderError> {
+    embree::enable_flush_to_zero();
+    let run_start = Instant::now();
+    let mut times = PhaseTimes::new();
+    let (description, report) =
+        times.time("load scene", || scene::load_with_report(&args.scene))?;
+    report_load(args, &report, &mut times);
+    let scene_hash = store::scene_fingerprint(&description);
+    let world = times.time("build Embree scene", || World::new(description))?;
+    let settings = render_settings(args, &world);
+    let wanted = wanted_maps(&settings, &world);
+    check_memory(settings.estimator.estimator, &world, &wanted)?;
+    let schedule = Schedule::new(settings.alpha, args.seed);
+    let camera = &world.description.camera;
+    let kernel_field = settings.estimator.estimator == EstimatorKind::Diffusion
+        && (args.kernel_field.is_some()
+            || ImageFormat::from_path(&output).ok() == Some(ImageFormat::Exr));
+    let header = |radii: BaseRadii| FilmHeader {
+        scene_file: args.scene.display().to_string(),
+        scene_hash,
+        seed: args.seed,
+        width: camera.width as usize,
+        height: camera.height as usize,
+        settings: settings.clone(),
+        radii,
+        kernel_field,
     };
-    let camera = PinholeCamera::new(&world.description.camera);
-    let bar = progress(world.description.camera.height as u64, "render");
-    let start = Instant::now();
-    let image = render_image(&camera, &integrator, args.spp, args.seed, &bar);
+    let reference = match &args.reference {
+        Some(path) => Some(read_reference(path, camera.width, camera.height)?),
+        None => None,
+    };
+
+    // The film to continue, or none yet (its header needs pass 0's radii).
+    let mut film: Option<Film> = None;
+    let mut first = args.first_pass;
+    if let Some(path) = &args.resume {
+        let resumed = times.time("read film", || film_file::read(path))?;
+        let probe = header(resumed.header.radii);
+        if let Some(field) = resumed.header.first_difference(&probe) {
+            return Err(RenderError::Invalid(format!(
+                "--resume {}: the film's {field} differs from this render's; it cannot be continued",
+                path.display()
+            )));
+        }
+        first = resumed.passes().end();
+        film = Some(resumed);
+    }
+    let film_path = args.film.clone().or_else(|| args.resume.clone());
+    let mut saved_photons = None;
+    let mut radii = film.as_ref().map(|f| f.header.radii);
+    if radii.is_none() && first > 0 {
+        // A run that does not start at pass 0 needs pass 0's radii: trace its maps once.
+        let maps = trace_pass_maps(&world, &settings, &schedule, 0, &mut times);
+        radii = Some(BaseRadii::resolve(&settings, &maps)?);
+    }
+
+    let limit = args
+        .passes
+        .unwrap_or(if args.time.is_some() { MAX_PASSES } else { 1 });
+    let last = (first + limit).min(MAX_PASSES);
+    let bar = progress(last - first, "passes");
+    let mut records: Vec<PassRecord> = Vec::new();
+    let mut last_report = None;
+    let mut last_write: Option<Instant> = None;
+    let mut budget_note = None;
+    let mut interrupted = false;
+    for pass in first..last {
+        if let (Some(budget), false) = (args.time, records.is_empty()) {
+            let mean = records.iter().map(|r| r.seconds).sum::<f64>() / records.len() as f64;
+            if run_start.elapsed().as_secs_f64() + mean > budget {
+                break;
+            }
+        }
+        let pass_start = Instant::now();
+        let maps = if pass == 0 && args.load_photons.is_some() {
+            load_maps(args, &world, scene_hash, &wanted, &mut times)?
+        } else {
+            trace_pass_maps(&world, &settings, &schedule, pass, &mut times)
+        };
+        if crate::interrupt::requested() {
+            interrupted = true;
+            break;
+        }
+        if pass == 0 {
+            if let Some(path) = &args.save_photons {
+                save_maps(path, scene_hash, args.seed, &wanted, &maps, &mut times)?;
+                saved_photons = Some(path.clone());
+            }
+        }
+        let radii = *radii.get_or_insert(BaseRadii::resolve(&settings, &maps)?);
+        let film = film.get_or_insert_with(|| Film::new(header(radii)));
+        let context = PassContext {
+            world: &world,
+            camera: PinholeCamera::new(camera),
+            settings: &settings,
+            radii,
+            schedule,
+            kernel_field,
+        };
+        let Some(report) = context.run(pass, maps, &mut times)? else {
+            interrupted = true;
+            break;
+        };
+        film.add_pass(pass, &report.image)
+            .expect("a pass's image fits its film and is new to it");
+        let seconds = pass_start.elapsed().as_secs_f64();
+        let relative_mse = reference.as_ref().map(|r| relative_mse(&film.image(), r));
+        records.push(PassRecord {
+            pass,
+            seconds,
+            elapsed: run_start.elapsed().as_secs_f64(),
+            relative_mse,
+        });
+        last_report = Some(report);
+        if pass == first
+            && args
+                .time
+                .is_some_and(|t| run_start.elapsed().as_secs_f64() > t)
+        {
+            budget_note = Some(format!(
+                "the --time budget ({:.1} s) is shorter than one pass ({seconds:.1} s); one pass ran",
+                args.time.unwrap_or_default()
+            ));
+        }
+        bar.inc(1);
+        bar.set_message(pass_message(film, &records, &last_report));
+        let due =
+            last_write.is_none_or(|t| t.elapsed() >= Duration::from_secs_f64(args.write_every));
+        if due && pass + 1 < last {
+            write_outputs(args, &output, film_path.as_deref(), film, &mut times)?;
+            last_write = Some(Instant::now());
+        }
+    }
     bar.finish_and_clear();
-    let pixels = (image.width * image.height) as u64;
-    times.record(
-        "render",
-        start.elapsed(),
-        &[("pixels", pixels), ("spp", args.spp as u64)],
-    );
-
-    stop_if_interrupted()?;
-
-    let options = WriteOptions {
-        exposure: args.exposure,
-        ..WriteOptions::default()
+    let Some(film) = film.filter(|f| !f.passes().is_empty()) else {
+        return Err(RenderError::Interrupted {
+            output,
+            saved_photons,
+        });
     };
-    times.time("write image", || {
-        image_io::write_image(&output, &image, &options)
-    })?;
-    if let (Some(path), Some(d), Some((map, _))) = (&args.kernel_field, &diffusion, &caustic_map) {
-        let field = times.time("kernel field", || {
-            super::render_kernel_field(&camera, &world, map, d)
-        });
-        times.time("write kernel field", || {
-            image_io::write_image(path, &field, &WriteOptions::default())
-        })?;
+    write_outputs(args, &output, film_path.as_deref(), &film, &mut times)?;
+    times.add_counts("write image", &[("passes", film.passes().count())]);
+    if let Some(path) = &args.kernel_field {
+        times.time("write kernel field", || write_kernel_field(path, &film))?;
     }
-    if let Some(path) = &args.stats {
-        let json = serde_json::json!({
-            "scene": args.scene,
-            "output": output,
-            "estimator": estimator,
-            "caustic": caustic_map.as_ref().map(|(m, c)| serde_json::json!({"emitted": c.emitted, "stored": c.stored, "bytes_per_photon": m.bytes_per_photon()})),
-            "global": global.as_ref().map(|(_, c)| serde_json::json!({"emitted": c.emitted, "stored": c.stored})),
-            "phases": times.phases,
-            "total_seconds": times.total_seconds(),
-            "peak_resident_bytes": crate::resident_memory::peak_resident_bytes(),
-        });
-        let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
-        image_io::write_atomically(path, |w| {
-            w.write_all(text.as_bytes()).map_err(|e| e.to_string())
-        })?;
-    }
-    Ok(RenderOutcome {
-        image,
+    let outcome = RenderOutcome {
+        image: film.image(),
         output,
         times,
-        caustic: caustic_map.as_ref().map(|(_, c)| *c),
-        caustic_bytes_per_photon: caustic_map.as_ref().map(|(m, _)| m.bytes_per_photon()),
-        global: global.as_ref().map(|(_, c)| *c),
-        estimator,
-    })
+        caustic: last_report.as_ref().and_then(|r| r.caustic),
+        caustic_bytes_per_photon: last_report
+            .as_ref()
+            .and_then(|r| r.caustic_bytes_per_photon),
+        global: last_report.as_ref().and_then(|r| r.global),
+        estimator: last_report.as_ref().and_then(|r| r.estimator.clone()),
+        passes: records,
+        interrupted,
+        budget_note,
+        film,
+    };
+    if let Some(path) = &args.stats {
+        write_stats(path, args, &outcome)?;
+    }
+    Ok(outcome)
 }
 
-fn trace(
-    world: &World,
-    kind: MapKind,
-    target: usize,
-    seed: u64,
-    what: &str,
+/// The pass bar's message: passes held, photons so far, the error so far.
+fn pass_message(
+    film: &Film,
+    records: &[PassRecord],
+    last: &Option<super::pass::PassReport>,
+) -> String {
+    let per_pass = last.as_ref().map_or(0, |r| {
+        r.caustic.map_or(0, |c| c.stored) + r.global.map_or(0, |c| c.stored)
+    });
+    let photons = per_pass * records.len() as u64;
+    let mut m = format!("{} passes, {photons} photons", film.passes().count());
+    if let Some(e) = records.last().and_then(|r| r.relative_mse) {
+        m += &format!(", rel. MSE {e:.3e}");
+    }
+    m
+}
+
+fn write_outputs(
+    args: &RenderArgs,
+    output: &Path,
+    film_path: Option<&Path>,
+    film: &Film,
     times: &mut PhaseTimes,
-) -> (PhotonMap, TraceCounts) {
-    let bar = progress(target as u64, what);
+) -> Result<(), RenderError> {
     let start = Instant::now();
-    let (map, counts) = trace_map(world, kind, target, seed, &bar);
-    bar.finish_and_clear();
-    times.record(
-        &format!("trace {what}"),
-        start.elapsed(),
-        &[("emitted", counts.emitted), ("stored", counts.stored)],
-    );
-    (map, counts)
+    write_film_image(output, film, args.exposure)?;
+    times.accumulate("write image", start.elapsed(), &[]);
+    if let Some(path) = film_path {
+        let start = Instant::now();
+        film_file::write(path, film)?;
+        times.accumulate("write film", start.elapsed(), &[]);
+    }
+    Ok(())
 }
 
-// ---- Photon map files, memory check and interruption (the reliability additions) ----
+fn write_stats(path: &Path, args: &RenderArgs, outcome: &RenderOutcome) -> Result<(), RenderError> {
+    let json = serde_json::json!({
+        "scene": args.scene,
+        "output": outcome.output,
+        "estimator": outcome.estimator,
+        "passes": outcome.film.passes().count(),
+        "pass_ranges": outcome.film.passes().ranges(),
+        "per_pass": outcome.passes,
+        "interrupted": outcome.interrupted,
+        "caustic": outcome.caustic.map(|c| serde_json::json!({"emitted": c.emitted, "stored": c.stored, "bytes_per_photon": outcome.caustic_bytes_per_photon})),
+        "global": outcome.global.map(|c| serde_json::json!({"emitted": c.emitted, "stored": c.stored})),
+        "phases": outcome.times.phases,
+        "total_seconds": outcome.times.total_seconds(),
+        "peak_resident_bytes": crate::resident_memory::peak_resident_bytes(),
+    });
+    let text = serde_json::to_string_pretty(&json).expect("JSON of plain values");
+    image_io::write_atomically(path, |w| {
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })?;
+    Ok(())
+}
+
+/// A reference image for the per-pass error: PFM or EXR, at the render's resolution.
+pub fn read_reference(path: &Path, width: u32, height: u32) -> Result<Image, RenderError> {
+    let image = image_io::read_image(path)?;
+    if (image.width, image.height) != (width as usize, height as usize) {
+        return Err(RenderError::Invalid(format!(
+            "--reference {}: is {}x{}, the render is {width}x{height}",
+            path.display(),
+            image.width,
+            image.height
+        )));
+    }
+    Ok(image)
+}
+
+/// Relative MSE of `image` against `reference` over the RGB channel means (see
+/// [`crate::tradeoff::scene_metrics::relative_mse`]).
+pub fn relative_mse(image: &Image, reference: &Image) -> f64 {
+    let mean = |i: &Image| -> Vec<f64> {
+        i.pixels
+            .iter()
+            .map(|p| crate::density::channel_mean(*p))
+            .collect()
+    };
+    crate::tradeoff::scene_metrics::relative_mse(&mean(image), &mean(reference))
+}
+
+/// Pass 0's maps from --load-photons.
+fn load_maps(
+    args: &RenderArgs,
+    world: &World,
+    scene: u64,
+    wanted: &[MapInfo],
+    times: &mut PhaseTimes,
+) -> Result<PassMaps, RenderError> {
+    let path = args.load_photons.as_ref().expect("asked for");
+    let _ = world;
+    let start = Instant::now();
+    let mut file = store::read(path)?;
+    file.check_fits(scene, args.seed, wanted)?;
+    let with_counts = |map: crate::photon::PhotonMap| {
+        let counts = TraceCounts {
+            emitted: map.emitted,
+            stored: map.len() as u64,
+        };
+        (map, counts)
+    };
+    let maps = PassMaps {
+        caustic: file.take(MapKind::Caustic).map(with_counts),
+        global: file
+            .take(MapKind::Global { with_direct: false })
+            .map(with_counts),
+    };
+    let stored = |m: &Option<(crate::photon::PhotonMap, TraceCounts)>| {
+        m.as_ref().map_or(0, |(_, c)| c.stored)
+    };
+    times.record(
+        "load photons",
+        start.elapsed(),
+        &[
+            ("caustic", stored(&maps.caustic)),
+            ("global", stored(&maps.global)),
+        ],
+    );
+    Ok(maps)
+}
+
+/// Saves pass 0's maps to --save-photons.
+fn save_maps(
+    path: &Path,
+    scene: u64,
+    seed: u64,
+    wanted: &[MapInfo],
+    maps: &PassMaps,
+    times: &mut PhaseTimes,
+) -> Result<(), RenderError> {
+    let start = Instant::now();
+    let list: Vec<(MapInfo, &crate::photon::PhotonMap)> = wanted
+        .iter()
+        .zip(maps.caustic.iter().chain(maps.global.iter()))
+        .map(|(info, (map, _))| (*info, map))
+        .collect();
+    let bytes = store::write(path, scene, seed, &list)?;
+    times.record("save photons", start.elapsed(), &[("bytes", bytes)]);
+    Ok(())
+}
+
+// ---- Input checks shared with the one-shot days: photon files and load reports ----
 
 /// What loading repaired or suspects: warnings on stderr, dropped triangles in the table.
 fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseTimes) {
@@ -424,101 +713,4 @@ fn validate_photon_files(args: &RenderArgs, output: &Path) -> Result<(), RenderE
         }
     }
     Ok(())
-}
-
-/// The maps this render uses: the caustic map when the scene has a mirror or glass object
-/// (and --caustic-photons > 0), the global map when `global_target` > 0.
-fn wanted_maps(args: &RenderArgs, world: &World, global_target: usize) -> Vec<MapInfo> {
-    let mut wanted = Vec::new();
-    if world.has_specular() && args.caustic_photons > 0 {
-        wanted.push(MapInfo {
-            kind: MapKind::Caustic,
-            target: args.caustic_photons as u64,
-        });
-    }
-    if global_target > 0 {
-        wanted.push(MapInfo {
-            kind: MapKind::Global {
-                with_direct: args.final_gather > 0,
-            },
-            target: global_target as u64,
-        });
-    }
-    wanted
-}
-
-type MapAndCounts = Option<(PhotonMap, TraceCounts)>;
-
-/// The caustic and global maps, loaded from --load-photons or traced (after the memory
-/// check), then saved to --save-photons when asked; also where they were saved.
-fn photon_maps(
-    args: &RenderArgs,
-    world: &World,
-    global_target: usize,
-    output: &Path,
-    times: &mut PhaseTimes,
-) -> Result<(MapAndCounts, MapAndCounts, Option<PathBuf>), RenderError> {
-    let wanted = wanted_maps(args, world, global_target);
-    let scene = store::scene_fingerprint(&world.description);
-    let with_counts = |map: PhotonMap| {
-        let counts = TraceCounts {
-            emitted: map.emitted,
-            stored: map.len() as u64,
-        };
-        (map, counts)
-    };
-    check_memory(args, world, &wanted)?;
-    let (caustic, global) = if let Some(path) = &args.load_photons {
-        let start = Instant::now();
-        let mut file = store::read(path)?;
-        file.check_fits(scene, args.seed, &wanted)?;
-        let caustic = file.take(MapKind::Caustic).map(with_counts);
-        let global = file
-            .take(MapKind::Global { with_direct: false })
-            .map(with_counts);
-        let stored = |m: &MapAndCounts| m.as_ref().map_or(0, |(_, c)| c.stored);
-        times.record(
-            "load photons",
-            start.elapsed(),
-            &[("caustic", stored(&caustic)), ("global", stored(&global))],
-        );
-        (caustic, global)
-    } else {
-        let mut caustic = None;
-        let mut global = None;
-        for info in &wanted {
-            let (slot, what) = match info.kind {
-                MapKind::Caustic => (&mut caustic, "caustic photons"),
-                MapKind::Global { .. } => (&mut global, "global photons"),
-            };
-            *slot = Some(trace(
-                world,
-                info.kind,
-                info.target as usize,
-                args.seed,
-                what,
-                times,
-            ));
-            if crate::interrupt::requested() {
-                return Err(RenderError::Interrupted {
-                    output: output.to_path_buf(),
-                    saved_photons: None,
-                });
-            }
-        }
-        (caustic, global)
-    };
-    let mut saved = None;
-    if let Some(path) = &args.save_photons {
-        let start = Instant::now();
-        let maps: Vec<(MapInfo, &PhotonMap)> = wanted
-            .iter()
-            .zip(caustic.iter().chain(global.iter()))
-            .map(|(info, (map, _))| (*info, map))
-            .collect();
-        let bytes = store::write(path, scene, args.seed, &maps)?;
-        times.record("save photons", start.elapsed(), &[("bytes", bytes)]);
-        saved = Some(path.clone());
-    }
-    Ok((caustic, global, saved))
 }

@@ -4,10 +4,9 @@
 //! pipeline's public parts (world, tracer, camera, integrator) and must not implement shading,
 //! tracing or estimates, nor write files.
 //!
-//! The caustic contribution is the eye pass with the caustic map minus the same eye pass
-//! without it. Every pixel draws its own random numbers (seeded by seed and pixel) and the
-//! caustic estimate draws none, so the direct light is the same in both and cancels; what is
-//! left is exactly what the caustic estimate adds, seen directly and through mirrors and glass.
+//! The caustic contribution is the eye pass's caustic layer (the integrator keeps direct,
+//! caustic and indirect light apart): exactly what the caustic estimate adds, seen directly
+//! and through mirrors and glass.
 //! Indirect diffuse light (the global map) is left out: it does not depend on the caustic
 //! estimate and would only add the same time to every run.
 
@@ -20,10 +19,10 @@ use crate::image_io::Image;
 use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, trace_map};
 use crate::render::integrator::{EstimatedMap, Indirect, Integrator};
-use crate::render::{PinholeCamera, render_image};
+use crate::render::pass::shade_pass;
+use crate::render::{PassSamples, PinholeCamera};
 use crate::scene::{self, SceneError};
 use crate::world::World;
-use glam::Vec3;
 use indicatif::ProgressBar;
 use std::cell::OnceCell;
 use std::path::{Path, PathBuf};
@@ -85,36 +84,34 @@ impl SceneTarget {
         trace_map(&self.world, MapKind::Caustic, count, self.seed, bar).0
     }
 
-    fn eye_pass(&self, caustics: Option<EstimatedMap>) -> Image {
+    /// The eye pass's image and its caustic layer.
+    fn eye_pass(&self, caustics: Option<EstimatedMap>) -> (Image, Image) {
         let integrator = Integrator {
             world: &self.world,
             caustics,
             indirect: Indirect::None,
             max_depth: MAX_DEPTH,
         };
-        render_image(
+        let samples = PassSamples::new(self.seed, 0, 1);
+        let pass = shade_pass(
             &self.camera,
             &integrator,
-            1,
-            self.seed,
+            &samples,
+            None,
+            12,
             &ProgressBar::hidden(),
-        )
+        );
+        (pass.layer(0), pass.layer(2))
     }
 
     /// The eye pass without caustics (rendered once; call it before timing runs).
     pub fn direct_light(&self) -> &Image {
-        self.direct.get_or_init(|| self.eye_pass(None))
+        self.direct.get_or_init(|| self.eye_pass(None).0)
     }
 
     /// What the caustic estimate adds to the eye pass (see the module notes).
     pub fn caustic_image(&self, map: &PhotonMap, estimate: &dyn RadianceEstimate) -> Image {
-        let direct = self.direct_light();
-        let mut image = self.eye_pass(Some(EstimatedMap { map, estimate }));
-        for (p, d) in image.pixels.iter_mut().zip(&direct.pixels) {
-            // Rounding can leave -1e-7 where there is no caustic.
-            *p = (*p - *d).max(Vec3::ZERO);
-        }
-        image
+        self.eye_pass(Some(EstimatedMap { map, estimate })).1
     }
 
     /// Scores later runs against `reference` (the caustic contribution, as from

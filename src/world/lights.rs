@@ -328,7 +328,7 @@ fn lambertian_aimed(
 }
 
 /// Samples light arriving at `x` from `light` (one sample). `None` when no light can arrive.
-pub fn sample_incident(light: &Light, x: Vec3, rng: &mut Rng) -> Option<IncidentSample> {
+pub fn sample_incident(light: &Light, x: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
     match light {
         Light::Point { position, power } => {
             let to = *position - x;
@@ -355,7 +355,7 @@ pub fn sample_incident(light: &Light, x: Vec3, rng: &mut Rng) -> Option<Incident
             let dist_c = d2.sqrt();
             let axis = to / dist_c;
             let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
-            let direction = uniform_cone(axis, cos_max, rng.next_2d());
+            let direction = uniform_cone(axis, cos_max, u);
             // Distance to the near intersection with the light sphere.
             let b = direction.dot(to);
             let disc = (b * b - (d2 - radius * radius)).max(0.0);
@@ -376,7 +376,7 @@ pub fn sample_incident(light: &Light, x: Vec3, rng: &mut Rng) -> Option<Incident
             edge_v,
             ..
         } => {
-            let (s, t) = rng.next_2d();
+            let (s, t) = u;
             let p = *corner + s * *edge_u + t * *edge_v;
             let (area, normal) = quad_area_normal(*edge_u, *edge_v);
             let to = p - x;
@@ -426,7 +426,7 @@ mod tests {
             let mut direct = Vec3::ZERO;
             for i in 0..n {
                 let mut rng = Rng::for_index(1, Stream::Pixels, i);
-                if let Some(s) = sample_incident(&light, Vec3::ZERO, &mut rng) {
+                if let Some(s) = sample_incident(&light, Vec3::ZERO, rng.next_2d()) {
                     direct += s.irradiance * s.direction.z.max(0.0);
                 }
             }

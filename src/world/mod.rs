@@ -43,6 +43,25 @@ pub struct Interaction {
     pub surface: Surface,
 }
 
+impl Interaction {
+    /// Whether a ray along `dir` arrives on the side the geometric normal points to.
+    #[inline]
+    pub fn entering(&self, dir: Vec3) -> bool {
+        dir.dot(self.geometric_normal) < 0.0
+    }
+
+    /// The geometric and shading normals turned towards the side a ray along `dir` arrives
+    /// from: the one place photon paths, eye paths and probes orient a hit.
+    #[inline]
+    pub fn facing(&self, dir: Vec3) -> (Vec3, Vec3) {
+        if self.entering(dir) {
+            (self.geometric_normal, self.shading_normal)
+        } else {
+            (-self.geometric_normal, -self.shading_normal)
+        }
+    }
+}
+
 /// What resolving a hit on a mesh reads, laid out by triangle so that a hit reads one place
 /// (not three indices and then three vertices and three normals scattered over the mesh).
 enum TriangleNormals {

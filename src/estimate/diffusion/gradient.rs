@@ -83,7 +83,7 @@ pub fn compute_gradients(map: &PhotonMap, radius: f32) -> Vec<Vec3> {
 /// diffusion estimate's `prepare` runs; call it yourself to time it as a phase of its own.
 pub fn gradient_pass(map: &mut PhotonMap, radius: f32) {
     let gradients = compute_gradients(map, radius);
-    map.set_gradients(&gradients);
+    map.set_gradients(&gradients, radius);
 }
 
 /// The photon-by-photon sum `Σ (x_i − x) Φ_i` (unscaled), for tests of the node sums.

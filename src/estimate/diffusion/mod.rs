@@ -36,7 +36,10 @@ use structure::{StructureTensor, TangentFrame};
 use tensor::{DiffusionTensor, diffusivity};
 
 /// The units of the diffusivity coefficient `K`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
 pub enum DiffusivityUnits {
     /// `K` is compared with `μ1 r² / L̂²`: relative edge contrast over one kernel radius.
     Dimensionless,
@@ -45,7 +48,10 @@ pub enum DiffusivityUnits {
 }
 
 /// The kernel of the diffusion estimate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
 pub enum DiffusionKernel {
     Epanechnikov,
     Gaussian,
@@ -179,9 +185,9 @@ impl DiffusionEstimate {
         scratch: &mut Scratch,
     ) -> (DiffusionTensor, KernelShape) {
         let p = &self.params;
-        let gradients = map
-            .gradients()
-            .expect("diffusion estimate queried before its gradient pass (call prepare)");
+        let gradients = map.gradients_at(p.gradient_radius).expect(
+            "diffusion estimate queried without gradients at its gradient radius (call prepare)",
+        );
         let (r2, rho2) = (sq(p.radius), sq(p.smoothing_radius));
         let frame = TangentFrame::new(query.normal);
         let normal = frame.normal.as_vec3();
@@ -269,11 +275,11 @@ impl RadianceEstimate for DiffusionEstimate {
         "diffusion"
     }
 
-    /// Runs the gradient pass unless the map already holds gradients (from
-    /// [`gradient_pass`] with [`DiffusionEstimate::gradient_radius`], run by a caller that
-    /// times it separately; gradients made with another radius are the caller's mistake).
+    /// Runs the gradient pass unless the map already holds gradients taken at this estimate's
+    /// gradient radius (from [`gradient_pass`] with [`DiffusionEstimate::gradient_radius`], run
+    /// by a caller that times it separately). Gradients of any other radius are recomputed.
     fn prepare(&self, map: &mut PhotonMap) {
-        if map.gradients().is_none() {
+        if map.gradients_at(self.params.gradient_radius).is_none() {
             gradient_pass(map, self.params.gradient_radius);
         }
     }

@@ -1,0 +1,112 @@
+//! Where a pixel's samples go: the pinhole camera's primary rays, and the sample positions of
+//! every (seed, pass, pixel, sample). Pixel positions and the first light sample of each
+//! camera path come from one Owen-scrambled Sobol sequence per pixel (Burley 2020, the
+//! `sobol_burley` crate), indexed by `pass · spp + sample`: the passes of a progressive run
+//! keep stratifying the same pixel instead of repeating its first sample, and pixels are
+//! decorrelated by their own scramble. Everything else a path draws comes from a PCG stream
+//! keyed by the same four numbers. Owns sample placement; must not shade or accumulate.
+
+use crate::sampling::{Rng, Stream, StreamSeed, pass_seed};
+use crate::scene::Camera;
+use glam::Vec3;
+
+/// Primary rays of a pinhole camera.
+#[derive(Clone, Copy, Debug)]
+pub struct PinholeCamera {
+    origin: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    tan_half: f32,
+    width: u32,
+    height: u32,
+}
+
+impl PinholeCamera {
+    pub fn new(c: &Camera) -> Self {
+        let forward = (c.look_at - c.position).normalize();
+        let right = forward.cross(c.up).normalize();
+        let up = right.cross(forward);
+        Self {
+            origin: c.position,
+            forward,
+            right,
+            up,
+            tan_half: (c.fov_y_degrees.to_radians() * 0.5).tan(),
+            width: c.width,
+            height: c.height,
+        }
+    }
+
+    /// The unit direction through image position (`x`, `y`) in pixels, (0, 0) the top-left corner.
+    pub fn direction(&self, x: f32, y: f32) -> Vec3 {
+        let aspect = self.width as f32 / self.height as f32;
+        let u = (2.0 * x / self.width as f32 - 1.0) * self.tan_half * aspect;
+        let v = (1.0 - 2.0 * y / self.height as f32) * self.tan_half;
+        (self.forward + u * self.right + v * self.up).normalize()
+    }
+
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    pub fn width(&self) -> usize {
+        self.width as usize
+    }
+
+    pub fn height(&self) -> usize {
+        self.height as usize
+    }
+}
+
+/// The stratified numbers of one camera sample, and the stream for the rest of its path.
+pub struct CameraSample {
+    /// Position inside the pixel, each in [0, 1).
+    pub jitter: (f32, f32),
+    /// The first direct-light sample of the path (at its first diffuse hit).
+    pub light: (f32, f32),
+    pub rng: Rng,
+}
+
+/// Samples of one pass: `spp` per pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct PassSamples {
+    seed: u64,
+    pass: u64,
+    spp: u32,
+    /// The seed's pixel stream of this pass (the PCG part).
+    stream: StreamSeed,
+}
+
+/// Sequence length `sobol_burley` supports: longer runs take a fresh scramble per block.
+const SOBOL_BLOCK: u64 = 1 << 16;
+
+impl PassSamples {
+    pub fn new(seed: u64, pass: u64, spp: u32) -> Self {
+        Self {
+            seed,
+            pass,
+            spp,
+            stream: StreamSeed::new(pass_seed(seed, pass), Stream::Pixels),
+        }
+    }
+
+    pub fn spp(&self) -> u32 {
+        self.spp
+    }
+
+    /// Sample `s` (< spp) of pixel `pixel` (row-major index) in this pass.
+    pub fn sample(&self, pixel: u64, s: u32) -> CameraSample {
+        let index = self.pass * self.spp as u64 + s as u64;
+        // The scramble depends on the seed and the pixel, not the pass: one sequence per pixel.
+        let scramble = StreamSeed::new(self.seed, Stream::Pixels)
+            .rng(pixel ^ (index / SOBOL_BLOCK).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+            .next_u32();
+        let [x, y, lu, lv] = sobol_burley::sample_4d((index % SOBOL_BLOCK) as u32, 0, scramble);
+        CameraSample {
+            jitter: (x, y),
+            light: (lu, lv),
+            rng: self.stream.rng(pixel * self.spp as u64 + s as u64),
+        }
+    }
+}

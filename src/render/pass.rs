@@ -1,0 +1,395 @@
+//! One pass of a progressive render, start to end: trace this pass's photon maps from its own
+//! random streams, resolve the estimates at this pass's radii (the diffusion estimate's
+//! gradient pass timed as its own phase), shade fresh pixel samples into a [`PassImage`], and
+//! drop the maps. A pass depends only on the scene, the [`RenderSettings`], the base radii,
+//! the seed and its index, so any pass can run anywhere and in any order. Owns the per-pass
+//! wiring; must not accumulate passes (the [`super::film`] does) or read the command line.
+//!
+//! Progressive radii. Pass `i` scales every radius by [`Schedule::radius_scale`]: the
+//! fixed-radius estimates (Epanechnikov, diffusion: `r`, `r_g` and `ρ` together) from their
+//! pass-0 radius; the k-NN estimates (simple, cone, Gaussian, and the global map's constant
+//! kernel) keep pass 0 as the one-shot estimate, and from pass 1 on cap their search at the
+//! scaled base radius (`--radius`, else the k-equivalent radius of pass 0's map). Once the cap
+//! is below the k-th photon's distance everywhere they are fixed-radius estimates with a
+//! shrinking radius too, so every estimate converges; the k-NN ones only after that point.
+//!
+//! Normalisation: each pass's maps carry their own emitted count, so each pass is an
+//! estimate of the whole image on its own and the film averages passes with equal weights.
+
+use super::camera::{PassSamples, PinholeCamera};
+use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
+use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
+use super::schedule::{Schedule, fixed_radius, pass_estimator};
+use crate::estimate::classic::KnnEstimate;
+use crate::estimate::diffusion::gradient_pass;
+use crate::estimate::kernel::RadialKernel;
+use crate::estimate::settings::k_equivalent_radius;
+use crate::estimate::{
+    DiffusionEstimate, EstimateError, EstimatorSettings, Query, RadianceEstimate,
+    ResolvedEstimator, Scratch,
+};
+use crate::photon::PhotonMap;
+use crate::photon::tracer::{MapKind, TraceCounts, trace_map};
+use crate::sampling::PathSampler;
+use crate::scene::Material;
+use crate::timing::{PhaseTimes, progress};
+use crate::world::{Surface, World};
+use glam::Vec3;
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// What every pass of one render uses: the film records it, and merging compares it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub struct RenderSettings {
+    /// Photons stored in each pass's caustic map (0: no caustic map).
+    pub caustic_photons: usize,
+    /// Photons stored in each pass's global map (0: no global map).
+    pub global_photons: usize,
+    /// Camera samples per pixel in each pass.
+    pub spp: u32,
+    pub max_depth: u32,
+    /// Final-gather rays per diffuse eye hit (0: the global map shown directly).
+    pub final_gather: u32,
+    pub global_k: usize,
+    /// `α` of the progressive radius reduction.
+    pub alpha: f64,
+    pub estimator: EstimatorSettings,
+}
+
+/// The radii pass 0 resolves and every later pass scales.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub struct BaseRadii {
+    /// The caustic estimate's fixed radius, or its k-NN search cap from pass 1 on.
+    pub caustic: Option<f32>,
+    /// The global map's k-NN search cap from pass 1 on.
+    pub global: Option<f32>,
+}
+
+impl BaseRadii {
+    /// The base radii from pass 0's maps (the given `--radius` when there is one).
+    pub fn resolve(settings: &RenderSettings, maps: &PassMaps) -> Result<BaseRadii, EstimateError> {
+        let e = &settings.estimator;
+        let caustic = match maps.caustic.as_ref().map(|(m, _)| m) {
+            Some(map) if !map.is_empty() => match e.radius {
+                Some(r) => Some(r),
+                None => {
+                    let r = k_equivalent_radius(map, e.k);
+                    if r.is_none() && fixed_radius(e.estimator) {
+                        return Err(EstimateError::DegenerateMap);
+                    }
+                    r
+                }
+            },
+            _ => e.radius,
+        };
+        let global = match maps.global.as_ref().map(|(m, _)| m) {
+            Some(map) if !map.is_empty() => k_equivalent_radius(map, settings.global_k),
+            _ => None,
+        };
+        Ok(BaseRadii { caustic, global })
+    }
+}
+
+/// The global map's estimate in pass `pass`.
+pub fn global_estimate(
+    settings: &RenderSettings,
+    radii: &BaseRadii,
+    schedule: &Schedule,
+    pass: u64,
+) -> KnnEstimate {
+    let cap = (pass > 0)
+        .then(|| radii.global.map(|r| r * schedule.radius_scale(pass)))
+        .flatten();
+    KnnEstimate::new(RadialKernel::Constant, settings.global_k, cap)
+}
+
+/// One pass's photon maps, with what tracing them took.
+#[derive(Default)]
+pub struct PassMaps {
+    pub caustic: Option<(PhotonMap, TraceCounts)>,
+    pub global: Option<(PhotonMap, TraceCounts)>,
+}
+
+/// The maps a render with `settings` traces in a scene.
+pub fn wanted_maps(settings: &RenderSettings, world: &World) -> Vec<crate::photon::store::MapInfo> {
+    use crate::photon::store::MapInfo;
+    let mut wanted = Vec::new();
+    if world.has_specular() && settings.caustic_photons > 0 {
+        wanted.push(MapInfo {
+            kind: MapKind::Caustic,
+            target: settings.caustic_photons as u64,
+        });
+    }
+    if settings.global_photons > 0 {
+        wanted.push(MapInfo {
+            kind: MapKind::Global {
+                with_direct: settings.final_gather > 0,
+            },
+            target: settings.global_photons as u64,
+        });
+    }
+    wanted
+}
+
+/// Traces the maps of pass `pass` (an interruption leaves them empty: check for it).
+pub fn trace_pass_maps(
+    world: &World,
+    settings: &RenderSettings,
+    schedule: &Schedule,
+    pass: u64,
+    times: &mut PhaseTimes,
+) -> PassMaps {
+    let seed = schedule.seed(pass);
+    let mut maps = PassMaps::default();
+    for info in wanted_maps(settings, world) {
+        let (slot, what) = match info.kind {
+            MapKind::Caustic => (&mut maps.caustic, "caustic photons"),
+            MapKind::Global { .. } => (&mut maps.global, "global photons"),
+        };
+        let bar = progress(info.target, what);
+        let start = Instant::now();
+        let (map, counts) = trace_map(world, info.kind, info.target as usize, seed, &bar);
+        bar.finish_and_clear();
+        times.accumulate(
+            &format!("trace {what}"),
+            start.elapsed(),
+            &[("emitted", counts.emitted), ("stored", counts.stored)],
+        );
+        *slot = Some((map, counts));
+        if crate::interrupt::requested() {
+            break;
+        }
+    }
+    maps
+}
+
+/// What a pass did, beside its image.
+pub struct PassReport {
+    pub image: PassImage,
+    pub caustic: Option<TraceCounts>,
+    pub global: Option<TraceCounts>,
+    /// The caustic estimate with every number resolved.
+    pub estimator: Option<String>,
+    pub caustic_bytes_per_photon: Option<f64>,
+}
+
+/// Everything a pass needs besides its maps.
+pub struct PassContext<'a> {
+    pub world: &'a World,
+    pub camera: PinholeCamera,
+    pub settings: &'a RenderSettings,
+    pub radii: BaseRadii,
+    pub schedule: Schedule,
+    /// Whether to fill the kernel-field channels (diffusion estimate only).
+    pub kernel_field: bool,
+}
+
+impl PassContext<'_> {
+    pub fn channels(&self) -> usize {
+        3 * RGB_LAYERS.len()
+            + if self.kernel_field {
+                KERNEL_CHANNELS.len()
+            } else {
+                0
+            }
+    }
+
+    /// Runs pass `pass` on its `maps` (consumed: they are freed when it ends). `None` when an
+    /// interruption was requested: the pass is incomplete and must be discarded.
+    pub fn run(
+        &self,
+        pass: u64,
+        maps: PassMaps,
+        times: &mut PhaseTimes,
+    ) -> Result<Option<PassReport>, EstimateError> {
+        if crate::interrupt::requested() {
+            return Ok(None);
+        }
+        let PassMaps {
+            mut caustic,
+            global,
+        } = maps;
+        let mut estimator = None;
+        let mut diffusion = None;
+        let caustic_estimate: Option<Box<dyn RadianceEstimate>> = match caustic.as_mut() {
+            Some((map, _)) if !map.is_empty() => {
+                let settings = pass_estimator(
+                    &self.settings.estimator,
+                    self.radii.caustic,
+                    &self.schedule,
+                    pass,
+                );
+                let resolved = settings.resolve(map)?;
+                estimator = Some(resolved.to_string());
+                if let ResolvedEstimator::Diffusion(d) = &resolved {
+                    let start = Instant::now();
+                    gradient_pass(map, d.gradient_radius());
+                    diffusion = Some(*d);
+                    times.accumulate(
+                        "gradient pass",
+                        start.elapsed(),
+                        &[("photons", map.len() as u64)],
+                    );
+                }
+                let estimate = resolved.into_boxed();
+                estimate.prepare(map);
+                Some(estimate)
+            }
+            _ => None,
+        };
+        let global_estimate = global_estimate(self.settings, &self.radii, &self.schedule, pass);
+        let integrator = Integrator {
+            world: self.world,
+            caustics: match (&caustic, &caustic_estimate) {
+                (Some((map, _)), Some(e)) => Some(EstimatedMap {
+                    map,
+                    estimate: e.as_ref(),
+                }),
+                _ => None,
+            },
+            indirect: match &global {
+                Some((map, _)) if !map.is_empty() => {
+                    let m = EstimatedMap {
+                        map,
+                        estimate: &global_estimate,
+                    };
+                    match self.settings.final_gather {
+                        0 => Indirect::Visualize(m),
+                        rays => Indirect::FinalGather { map: m, rays },
+                    }
+                }
+                _ => Indirect::None,
+            },
+            max_depth: self.settings.max_depth,
+        };
+        let probe = match (&caustic, &diffusion) {
+            (Some((map, _)), Some(d)) if self.kernel_field => Some(KernelProbe {
+                world: self.world,
+                map,
+                estimate: d,
+            }),
+            _ => None,
+        };
+        let samples = PassSamples::new(self.schedule.seed, pass, self.settings.spp);
+        let bar = progress(self.camera.height() as u64, "render");
+        let start = Instant::now();
+        let image = shade_pass(
+            &self.camera,
+            &integrator,
+            &samples,
+            probe.as_ref(),
+            self.channels(),
+            &bar,
+        );
+        bar.finish_and_clear();
+        let pixels = (image.width * image.height) as u64;
+        times.accumulate(
+            "render",
+            start.elapsed(),
+            &[("pixels", pixels), ("spp", self.settings.spp as u64)],
+        );
+        if crate::interrupt::requested() {
+            return Ok(None);
+        }
+        Ok(Some(PassReport {
+            image,
+            caustic: caustic.as_ref().map(|(_, c)| *c),
+            global: global.as_ref().map(|(_, c)| *c),
+            estimator,
+            caustic_bytes_per_photon: caustic.as_ref().map(|(m, _)| m.bytes_per_photon()),
+        }))
+    }
+}
+
+/// The diffusion kernel's shape where a pixel's centre ray first meets a diffuse surface.
+pub struct KernelProbe<'a> {
+    pub world: &'a World,
+    pub map: &'a PhotonMap,
+    pub estimate: &'a DiffusionEstimate,
+}
+
+impl KernelProbe<'_> {
+    /// (λ2, (1 − λ2) cos 2θ, (1 − λ2) sin 2θ) with θ the edge direction's angle in the
+    /// surface's tangent frame; a round kernel (1, 0, 0) where nothing diffuse is hit.
+    pub fn channels(&self, origin: Vec3, dir: Vec3, scratch: &mut Scratch) -> [f32; 3] {
+        const ROUND: [f32; 3] = [1.0, 0.0, 0.0];
+        let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
+            return ROUND;
+        };
+        let Surface::Material(m) = hit.surface else {
+            return ROUND;
+        };
+        if !matches!(self.world.material(m), Material::Diffuse { .. }) {
+            return ROUND;
+        }
+        let (_, n) = hit.facing(dir);
+        let query = Query {
+            position: hit.position,
+            normal: n,
+        };
+        let shape = self.estimate.kernel_at(self.map, &query, scratch);
+        let (t, b) = crate::sampling::basis(n);
+        let theta = shape.x1.dot(b).atan2(shape.x1.dot(t));
+        let w = 1.0 - shape.lambda2;
+        [
+            shape.lambda2,
+            w * (2.0 * theta).cos(),
+            w * (2.0 * theta).sin(),
+        ]
+    }
+}
+
+/// Every pixel of one pass, rows in parallel (one row per job: rows of very different cost,
+/// a caustic against empty floor, are shared out evenly), each thread with its own scratch.
+/// Pixels not yet started when an interruption is requested are left black; the caller must
+/// check for it and discard the pass.
+pub fn shade_pass(
+    camera: &PinholeCamera,
+    integrator: &Integrator,
+    samples: &PassSamples,
+    probe: Option<&KernelProbe>,
+    channels: usize,
+    progress: &ProgressBar,
+) -> PassImage {
+    let (w, h) = (camera.width(), camera.height());
+    let mut image = PassImage::new(w, h, channels);
+    let spp = samples.spp();
+    image
+        .values
+        .par_chunks_mut(w * channels)
+        .with_max_len(1)
+        .enumerate()
+        .for_each_init(Scratch::default, |scratch, (y, row)| {
+            for (x, px) in row.chunks_mut(channels).enumerate() {
+                // Per pixel, not per row: a row through glass can take seconds.
+                if crate::interrupt::requested() {
+                    return;
+                }
+                let pixel = (y * w + x) as u64;
+                let mut sum = Radiance::default();
+                for s in 0..spp {
+                    let sample = samples.sample(pixel, s);
+                    let (jx, jy) = sample.jitter;
+                    let d = camera.direction(x as f32 + jx, y as f32 + jy);
+                    let mut sampler = PathSampler::new(sample.rng, Some(sample.light));
+                    sum += integrator.radiance(camera.origin(), d, 0, &mut sampler, scratch);
+                }
+                let mean = (1.0 / spp.max(1) as f32) * sum;
+                for (i, v) in [mean.total(), mean.direct, mean.caustic, mean.indirect]
+                    .iter()
+                    .enumerate()
+                {
+                    px[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
+                }
+                if let Some(p) = probe {
+                    let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+                    px[12..15].copy_from_slice(&p.channels(camera.origin(), d, scratch));
+                }
+            }
+            progress.inc(1);
+        });
+    image
+}

@@ -1,0 +1,352 @@
+//! Progressive rendering (issue 14): passes independent of what came before them, films that
+//! merge and resume to exactly the run that rendered every pass at once, refusals of films that
+//! do not belong together, thread-count invariance over several passes, the time budget, the
+//! radius schedule on every estimate, and the EXR layers.
+
+mod support;
+
+use dpm::render::film_file;
+use dpm::render::merge::{self, MergeArgs, MergeError};
+use dpm::render::pipeline;
+use std::path::{Path, PathBuf};
+use support::*;
+
+/// The Cornell box (point light: full caustic and global maps) small and fast.
+fn small_box(dir: &Path) -> PathBuf {
+    write_scene(dir, "box.toml", &cornell_point_light(40, 30))
+}
+
+const FAST: [&str; 8] = [
+    "--caustic-photons",
+    "20000",
+    "--global-photons",
+    "10000",
+    "--final-gather",
+    "4",
+    "--k",
+    "50",
+];
+
+fn render(scene: &Path, out: &Path, extra: &[&str]) -> pipeline::RenderOutcome {
+    let mut args = vec![path_str(scene), "-o", path_str(out)];
+    args.extend_from_slice(&FAST);
+    args.extend_from_slice(extra);
+    pipeline::run(&render_args(&args)).unwrap_or_else(|e| panic!("{args:?}: {e}"))
+}
+
+fn merge_args(films: &[&Path], out: &Path, film: Option<&Path>) -> MergeArgs {
+    MergeArgs {
+        films: films.iter().map(|p| p.to_path_buf()).collect(),
+        output: out.to_path_buf(),
+        film: film.map(Path::to_path_buf),
+        expect: None,
+        exposure: 0.0,
+        kernel_field: None,
+    }
+}
+
+/// Largest per-pixel relative difference of two films' sums (over pixels with light).
+fn max_relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / x.abs().max(y.abs()).max(1e-12))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn shards_merged_equal_one_run_and_resuming_equals_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let d = |n: &str| dir.path().join(n);
+    for estimator in ["diffusion", "cone"] {
+        let est = ["--estimator", estimator];
+        let whole = render(
+            &scene,
+            &d("whole.pfm"),
+            &[
+                &est[..],
+                &["--passes", "4", "--film", path_str(&d("whole.film"))],
+            ]
+            .concat(),
+        );
+        assert_eq!(whole.film.passes().count(), 4);
+        let a = d("a.film");
+        let b = d("b.film");
+        render(
+            &scene,
+            &d("a.pfm"),
+            &[&est[..], &["--passes", "2", "--film", path_str(&a)]].concat(),
+        );
+        render(
+            &scene,
+            &d("b.pfm"),
+            &[
+                &est[..],
+                &["--first-pass", "2", "--passes", "2", "--film", path_str(&b)],
+            ]
+            .concat(),
+        );
+        let merged = merge::run(&merge_args(&[&b, &a], &d("merged.pfm"), Some(&d("m.film"))))
+            .expect("merge");
+        assert!(merged.missing.is_empty());
+        let diff = max_relative_difference(whole.film.sums(), merged.film.sums());
+        assert!(
+            diff <= 1e-6,
+            "{estimator}: merged differs from one run by {diff}"
+        );
+        assert_eq!(merged.film.header, whole.film.header);
+        // The merged film on disk reads back as it was written.
+        assert_eq!(film_file::read(&d("m.film")).unwrap(), merged.film);
+
+        // Resuming the 2-pass film for 2 more passes renders the same 4 passes.
+        std::fs::copy(&a, d("r.film")).unwrap();
+        let resumed = render(
+            &scene,
+            &d("r.pfm"),
+            &[
+                &est[..],
+                &["--resume", path_str(&d("r.film")), "--passes", "2"],
+            ]
+            .concat(),
+        );
+        assert_eq!(resumed.film.passes().ranges(), &[(0, 4)]);
+        let diff = max_relative_difference(whole.film.sums(), resumed.film.sums());
+        assert!(diff <= 1e-6, "{estimator}: resumed differs by {diff}");
+        assert_eq!(film_file::read(&d("r.film")).unwrap().passes().count(), 4);
+    }
+}
+
+#[test]
+fn merge_refuses_overlaps_and_films_of_another_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let d = |n: &str| dir.path().join(n);
+    let film = |name: &str, extra: &[&str]| {
+        let path = d(name);
+        render(
+            &scene,
+            &d("x.pfm"),
+            &[extra, &["--film", path_str(&path)]].concat(),
+        );
+        path
+    };
+    let p01 = film("p01.film", &["--passes", "2"]);
+    let p12 = film("p12.film", &["--first-pass", "1", "--passes", "2"]);
+    let seed = film("seed.film", &["--first-pass", "2", "--seed", "5"]);
+    let k = film("k.film", &["--first-pass", "2", "--global-k", "40"]);
+    let p3 = film("p3.film", &["--first-pass", "3"]);
+    let out = d("m.pfm");
+    let refused = |films: &[&Path], fragments: &[&str]| {
+        let e = merge::run(&merge_args(films, &out, None)).expect_err("refused");
+        assert_eq!(e.exit_code(), 2, "{e}");
+        let text = e.to_string();
+        for f in fragments {
+            assert!(text.contains(f), "{text:?} lacks {f:?}");
+        }
+        assert!(!out.exists(), "nothing written on a refusal");
+    };
+    refused(&[&p01, &p12], &["p12.film", "p01.film", "both hold pass 1"]);
+    refused(&[&p01, &seed], &["seed.film", "differ in seed"]);
+    refused(&[&p01, &k], &["k.film", "differ in settings"]);
+    // A gap is merged, and named.
+    let merged = merge::run(&merge_args(&[&p01, &p3], &out, None)).expect("merge with a gap");
+    assert_eq!(
+        merged.missing_text().as_deref(),
+        Some("passes 2 are missing")
+    );
+    let mut strict = merge_args(&[&p01, &p3], &d("s.pfm"), None);
+    strict.expect = Some(4);
+    let e = merge::run(&strict).expect_err("--expect refuses the gap");
+    assert!(
+        matches!(e, MergeError::Invalid(_)) && e.to_string().contains("pass 2 is missing"),
+        "{e}"
+    );
+    // A resume of another render is refused too.
+    let mut args = vec![path_str(&scene), "-o", path_str(&out)];
+    args.extend_from_slice(&FAST);
+    args.extend_from_slice(&["--resume", path_str(&p01), "--seed", "9"]);
+    let e = pipeline::run(&render_args(&args)).err().expect("refused");
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("seed differs"), "{e}");
+}
+
+#[test]
+fn corrupt_truncated_and_oversized_films_are_refused_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let good = dir.path().join("good.film");
+    render(
+        &scene,
+        &dir.path().join("x.pfm"),
+        &["--film", path_str(&good)],
+    );
+    let bytes = std::fs::read(&good).unwrap();
+    let case = |name: &str, content: Vec<u8>, fragment: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, content).unwrap();
+        let e = film_file::read(&path).expect_err(name);
+        assert_eq!(e.exit_code(), 2, "{name}: {e}");
+        let text = e.to_string();
+        assert!(
+            text.contains(name) && text.contains(fragment),
+            "{name}: {text}"
+        );
+    };
+    let mut flipped = bytes.clone();
+    let at = bytes.len() - 20;
+    flipped[at] ^= 0x40;
+    case("flipped.film", flipped, "checksum");
+    case(
+        "truncated.film",
+        bytes[..bytes.len() - 100].to_vec(),
+        "bytes of sums",
+    );
+    case("empty.film", Vec::new(), "too short");
+    case(
+        "other.film",
+        b"PF\n2 2\n-1.0\n0123456789abcdef0123456789".to_vec(),
+        "magic",
+    );
+    // A header that claims a 100000 × 100000 image: refused from the file's size.
+    let text = String::from_utf8_lossy(&bytes).to_string();
+    let start = text.find("width = ").unwrap();
+    let header_end = 16 + u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut huge = bytes[..header_end].to_vec();
+    let old = &text[start..start + text[start..].find('\n').unwrap()];
+    let replaced = String::from_utf8(huge.clone())
+        .unwrap_or_default()
+        .replace(old, "width = 100000");
+    if !replaced.is_empty() {
+        huge = replaced.into_bytes();
+        let len = (huge.len() - 16) as u32;
+        huge[12..16].copy_from_slice(&len.to_le_bytes());
+        huge.extend_from_slice(&bytes[header_end..]);
+        case("huge.film", huge, "needs");
+    }
+}
+
+#[test]
+fn several_passes_do_not_depend_on_the_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let one = render(
+        &scene,
+        &dir.path().join("1.pfm"),
+        &["--passes", "3", "--threads", "1"],
+    );
+    let two = render(
+        &scene,
+        &dir.path().join("2.pfm"),
+        &["--passes", "3", "--threads", "2"],
+    );
+    assert_eq!(one.film.sums(), two.film.sums());
+    // Passes differ from each other: fresh photons and fresh samples.
+    let first = render(&scene, &dir.path().join("p0.pfm"), &["--passes", "1"]);
+    let second = render(&scene, &dir.path().join("p1.pfm"), &["--first-pass", "1"]);
+    assert_ne!(first.film.sums(), second.film.sums());
+}
+
+#[test]
+fn a_time_budget_shorter_than_a_pass_runs_one_pass_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let o = render(&scene, &dir.path().join("t.pfm"), &["--time", "0.001"]);
+    assert_eq!(o.film.passes().count(), 1);
+    assert!(
+        o.budget_note
+            .as_deref()
+            .unwrap_or("")
+            .contains("shorter than one pass")
+    );
+    // A budget of several passes stops before overrunning it.
+    let budget = 4.0 * o.passes[0].seconds + 0.5;
+    let o = render(
+        &scene,
+        &dir.path().join("t2.pfm"),
+        &["--time", &budget.to_string(), "--passes", "50"],
+    );
+    let n = o.film.passes().count();
+    assert!((2..50).contains(&n), "{n} passes in {budget} s");
+    assert!(
+        o.passes.last().unwrap().elapsed <= budget * 1.5,
+        "{:?}",
+        o.passes.last()
+    );
+}
+
+/// The EXR's layers, read back by OpenImageIO (`oiiotool`, Debian's openimageio-tools), not by
+/// this crate: the channel names, and each layer's values against the film.
+#[test]
+fn exr_output_carries_named_layers_that_openimageio_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let exr = dir.path().join("out.exr");
+    let o = render(&scene, &exr, &["--passes", "2"]);
+    let info = std::process::Command::new("oiiotool")
+        .args(["--info", "-v", path_str(&exr)])
+        .output()
+        .expect("oiiotool runs (apt-get install -y openimageio-tools)");
+    let text = String::from_utf8_lossy(&info.stdout);
+    for channel in [
+        "R, G, B",
+        "direct.R",
+        "caustic.G",
+        "indirect.B",
+        "kernel.lambda2",
+        "kernel.edge_cos2",
+    ] {
+        assert!(text.contains(channel), "{channel} missing from\n{text}");
+    }
+    // Every sample as OpenImageIO decodes it, channels in the file's order.
+    let names: Vec<String> = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("channel list: "))
+        .expect("a channel list")
+        .split(", ")
+        .map(str::to_string)
+        .collect();
+    let dump = std::process::Command::new("oiiotool")
+        .args(["--dumpdata", path_str(&exr)])
+        .output()
+        .expect("oiiotool --dumpdata");
+    let dump = String::from_utf8_lossy(&dump.stdout).to_string();
+    let rows: Vec<Vec<f64>> = dump
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("Pixel ("))
+        .map(|l| {
+            let values = &l[l.find(':').expect("Pixel (x, y): values") + 1..];
+            values
+                .split_whitespace()
+                .map(|v| v.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 40 * 30);
+    for layer in ["direct", "caustic", "indirect"] {
+        let want = o.film.layer(layer).unwrap();
+        let mut lit = 0;
+        for (c, axis) in ["R", "G", "B"].iter().enumerate() {
+            let column = names
+                .iter()
+                .position(|n| *n == format!("{layer}.{axis}"))
+                .unwrap();
+            for (row, p) in rows.iter().zip(&want.pixels) {
+                let w = p.to_array()[c] as f64;
+                assert!(
+                    (row[column] - w).abs() <= 1e-6 * w.abs() + 2e-9,
+                    "{layer}.{axis}"
+                );
+                lit += (w > 0.0) as usize;
+            }
+        }
+        assert!(lit > 0, "{layer} is black");
+    }
+    // The layers add up to the image.
+    let layer = |name| o.film.layer(name).unwrap().pixels;
+    let (direct, caustic, indirect) = (layer("direct"), layer("caustic"), layer("indirect"));
+    for (i, img) in o.film.image().pixels.iter().enumerate() {
+        let sum = direct[i] + caustic[i] + indirect[i];
+        assert!((sum - *img).abs().max_element() <= 1e-5 * img.max_element().max(1e-3));
+    }
+}
