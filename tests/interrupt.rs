@@ -209,3 +209,63 @@ fn ctrl_c_stops_the_binary_with_exit_130_and_keeps_the_old_output() {
         strays(dir.path(), &keep)
     );
 }
+
+/// Ctrl-C during a progressive render ends the pass in flight unfinished and keeps every
+/// complete one: the output and the film hold them, and the exit code is still 130.
+#[test]
+fn ctrl_c_during_a_progressive_render_keeps_the_complete_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "scene.toml", &caustic_scene(1.0, 200, 150));
+    let output = dir.path().join("out.pfm");
+    let film = dir.path().join("out.film");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dpm"))
+        .args([
+            "render".as_ref(),
+            scene.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+        ])
+        .args(["--film".as_ref(), film.as_os_str()])
+        .args([
+            "--caustic-photons",
+            "50000",
+            "--passes",
+            "100000",
+            "--spp",
+            "4",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The film appears once the first pass is complete; the next ones then follow.
+    let start = Instant::now();
+    while !film.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no pass completed"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the render ended too soon"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    assert_fails(&out, 130, &["interrupted: the output holds the "], "Ctrl-C");
+    let film = dpm::render::film_file::read(&film).expect("a whole film");
+    let passes = film.passes().count();
+    assert!(
+        passes >= 1 && film.passes().ranges() == [(0, passes)],
+        "{:?}",
+        film.passes()
+    );
+    assert!(stderr(&out).contains(&format!("holds the {passes} complete pass")));
+    let image = dpm::image_io::read_pfm(&output).expect("a whole image");
+    assert_eq!(image, film.image());
+}

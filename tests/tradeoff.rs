@@ -194,6 +194,7 @@ fn quick_constructed_sweep_writes_consistent_rows() {
         "relative_mse",
         "edge_band_rmse",
         "flat_noise",
+        "passes",
     ];
     assert_eq!(header, expected);
     // Quick preset: 2 counts × (2 cone k + 1 Epanechnikov radius + 1 diffusion radius × 1 K).

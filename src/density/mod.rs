@@ -366,7 +366,7 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     let (photons_seconds, prepare_seconds, estimate_seconds) =
         (seconds.photons, seconds.prepare, seconds.estimate);
 
-    let values: Vec<f64> = pixels.iter().map(|p| channel_mean(*p)).collect();
+    let values = mean_values(&sums, passes);
     let metrics = source
         .distribution
         .as_ref()

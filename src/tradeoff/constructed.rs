@@ -38,7 +38,7 @@ impl Target for ConstructedTarget {
         format!("{:?}", self.name).to_lowercase()
     }
 
-    fn photons(&mut self, count: usize) -> Result<PhotonMap, SweepError> {
+    fn photons(&mut self, count: usize, pass: u64) -> Result<PhotonMap, SweepError> {
         let distribution = Distribution::new(self.name, count as u64);
         if self.truth.is_none() {
             // The density and the regions do not depend on the count.
@@ -49,7 +49,7 @@ impl Target for ConstructedTarget {
             let regions = density::regions(&distribution, &self.grid, widths);
             self.truth = Some((distribution.truth_on(&self.grid), regions));
         }
-        let photons = distribution.photons(self.seed);
+        let photons = distribution.photons(crate::sampling::pass_seed(self.seed, pass));
         let emitted = photons.len() as u64;
         Ok(PhotonMap::build(photons, emitted))
     }

@@ -14,6 +14,7 @@
 
 pub mod constructed;
 pub mod pareto;
+pub mod progressive;
 pub mod reference;
 pub mod scene_metrics;
 pub mod scene_target;
@@ -21,7 +22,9 @@ pub mod svg;
 pub mod sweep;
 
 use crate::density::{DistributionName, Extent, Grid};
+use crate::estimate::settings::EstimatorKind;
 use crate::image_io::{Image, ImageError, WriteOptions};
+use crate::render::schedule::{DEFAULT_ALPHA, Schedule};
 use constructed::ConstructedTarget;
 use glam::Vec3;
 use reference::{ReferenceError, ReferenceSettings};
@@ -93,9 +96,12 @@ pub struct TradeoffArgs {
     /// The plot of error against time. Default: out/tradeoff/TARGET.svg.
     #[arg(long, value_name = "FILE.svg")]
     pub svg: Option<PathBuf>,
-    /// Stored photons of a scene's reference. Default: 20× the largest of --photons.
+    /// Stored photons of each pass of a scene's reference. Default: 5× the largest of --photons.
     #[arg(long)]
     pub reference_photons: Option<usize>,
+    /// Progressive passes of a scene's reference (see `dpm reference`).
+    #[arg(long, default_value_t = reference::DEFAULT_PASSES)]
+    pub reference_passes: u64,
     /// The reference's radius is the k-equivalent radius for this k (see `dpm reference`).
     #[arg(long, default_value_t = reference::DEFAULT_K as usize)]
     pub reference_k: usize,
@@ -108,6 +114,14 @@ pub struct TradeoffArgs {
     /// Worker threads (0: one per core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Also run each swept estimate progressively for this many passes (at its default
+    /// setting: cone k = 400, the others at 1× radius, K = 0.2), scored after 1, 2, 4, ...
+    /// passes against cumulative time: one line per estimate on the plot.
+    #[arg(long, value_name = "PASSES", default_value_t = 0)]
+    pub progressive: u64,
+    /// Stored photons per pass of the progressive series. Default: the largest of --photons.
+    #[arg(long, value_name = "N")]
+    pub progressive_photons: Option<usize>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -151,6 +165,15 @@ fn invalid(message: String) -> TradeoffError {
     TradeoffError::Invalid(message)
 }
 
+/// The estimates `--estimates` names (default: all three).
+fn estimates(args: &TradeoffArgs) -> Vec<SweptEstimate> {
+    args.estimates.clone().unwrap_or(vec![
+        SweptEstimate::Cone,
+        SweptEstimate::Epanechnikov,
+        SweptEstimate::Diffusion,
+    ])
+}
+
 /// The plan the flags ask for, presets and defaults filled in.
 pub fn plan(args: &TradeoffArgs) -> Result<SweepPlan, TradeoffError> {
     let scene = args.scene.is_some();
@@ -169,11 +192,7 @@ pub fn plan(args: &TradeoffArgs) -> Result<SweepPlan, TradeoffError> {
             vec![0.1, 0.2, 0.4],
         )
     };
-    let estimates = args.estimates.clone().unwrap_or(vec![
-        SweptEstimate::Cone,
-        SweptEstimate::Epanechnikov,
-        SweptEstimate::Diffusion,
-    ]);
+    let estimates = estimates(args);
     fn or_none<T>(wanted: bool, v: Vec<T>) -> Vec<T> {
         if wanted { v } else { Vec::new() }
     }
@@ -324,6 +343,7 @@ pub fn run(args: &TradeoffArgs) -> Result<TradeoffOutcome, TradeoffError> {
                         .reference_photons
                         .unwrap_or(largest * reference::PHOTON_FACTOR),
                     k: args.reference_k,
+                    passes: args.reference_passes,
                     seed: args.seed,
                 };
                 let made = reference::ensure(&target, settings, &args.cache_dir)?;
@@ -350,7 +370,32 @@ pub fn run(args: &TradeoffArgs) -> Result<TradeoffOutcome, TradeoffError> {
         let bar = crate::timing::progress(plan.runs() as u64, "tradeoff");
         let rows = sweep::run_sweep(&plan, target.as_mut(), &bar);
         bar.finish_and_clear();
-        let rows = rows?;
+        let mut rows = rows?;
+        if args.progressive > 0 {
+            let kinds: Vec<EstimatorKind> = estimates(args)
+                .iter()
+                .map(|e| match e {
+                    SweptEstimate::Cone => EstimatorKind::Cone,
+                    SweptEstimate::Epanechnikov => EstimatorKind::Epanechnikov,
+                    SweptEstimate::Diffusion => EstimatorKind::Diffusion,
+                })
+                .collect();
+            let count = args
+                .progressive_photons
+                .unwrap_or_else(|| plan.photon_counts.iter().copied().max().unwrap_or(1));
+            let bar = crate::timing::progress(args.progressive, "progressive");
+            let schedule = Schedule::new(DEFAULT_ALPHA, args.seed);
+            let series = progressive::run_progressive(
+                &kinds,
+                count,
+                args.progressive,
+                schedule,
+                target.as_mut(),
+                &bar,
+            );
+            bar.finish_and_clear();
+            rows.extend(series?);
+        }
         crate::density::write_text(&csv, &sweep::format_csv(&rows))?;
         let title = format!(
             "{} ({}x{}): {} against time",
@@ -377,12 +422,21 @@ pub fn run(args: &TradeoffArgs) -> Result<TradeoffOutcome, TradeoffError> {
     })
 }
 
-/// Estimate names in the order they appear in the rows.
-fn estimate_names(rows: &[Row]) -> Vec<&'static str> {
-    let mut names: Vec<&'static str> = Vec::new();
+/// A row's series: its estimate, or "progressive ESTIMATE" for a progressive series.
+fn series_name(r: &Row) -> String {
+    match r.passes {
+        Some(_) => format!("progressive {}", r.estimate),
+        None => r.estimate.to_string(),
+    }
+}
+
+/// Series names in the order they appear in the rows.
+fn estimate_names(rows: &[Row]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
     for r in rows {
-        if !names.contains(&r.estimate) {
-            names.push(r.estimate);
+        let name = series_name(r);
+        if !names.contains(&name) {
+            names.push(name);
         }
     }
     names
@@ -393,14 +447,19 @@ pub fn series(rows: &[Row], error: ErrorKind) -> Vec<svg::Series> {
     estimate_names(rows)
         .into_iter()
         .map(|name| {
-            let points: Vec<(f64, f64)> = rows
+            let members: Vec<&Row> = rows.iter().filter(|r| series_name(r) == name).collect();
+            let points: Vec<(f64, f64)> = members
                 .iter()
-                .filter(|r| r.estimate == name)
                 .map(|r| (r.total_seconds(), error.of(&r.errors)))
                 .collect();
-            let front = pareto::pareto_front(&points);
+            // A progressive series is drawn as its line through every checkpoint.
+            let front = if members.iter().any(|r| r.passes.is_some()) {
+                (0..points.len()).collect()
+            } else {
+                pareto::pareto_front(&points)
+            };
             svg::Series {
-                name: name.to_string(),
+                name,
                 points,
                 front,
             }
@@ -423,7 +482,7 @@ pub fn front_table(rows: &[Row], error: ErrorKind) -> String {
     );
     for name in estimate_names(rows) {
         let indices: Vec<usize> = (0..rows.len())
-            .filter(|&i| rows[i].estimate == name)
+            .filter(|&i| series_name(&rows[i]) == name)
             .collect();
         let points: Vec<(f64, f64)> = indices.iter().map(|&i| all[i]).collect();
         for j in pareto::pareto_front(&points) {
@@ -431,9 +490,12 @@ pub fn front_table(rows: &[Row], error: ErrorKind) -> String {
             let r = &rows[i];
             out.push_str(&format!(
                 "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.4} | {:.4} | {:.4} | {:.4} | {} |\n",
-                r.estimate,
+                name,
                 r.photons,
-                r.parameters(),
+                match r.passes {
+                    Some(p) => format!("{} ×{p} passes", r.parameters()),
+                    None => r.parameters(),
+                },
                 r.trace_seconds,
                 r.prepare_seconds,
                 r.estimate_seconds,

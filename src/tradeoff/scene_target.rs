@@ -79,9 +79,10 @@ impl SceneTarget {
         self.world.description.camera.height as usize
     }
 
-    /// A caustic map of `count` stored photons.
-    pub fn trace(&self, count: usize, bar: &ProgressBar) -> PhotonMap {
-        trace_map(&self.world, MapKind::Caustic, count, self.seed, bar).0
+    /// A caustic map of `count` stored photons, from pass `pass`'s streams.
+    pub fn trace(&self, count: usize, pass: u64, bar: &ProgressBar) -> PhotonMap {
+        let seed = crate::sampling::pass_seed(self.seed, pass);
+        trace_map(&self.world, MapKind::Caustic, count, seed, bar).0
     }
 
     /// The eye pass's image and its caustic layer.
@@ -92,6 +93,8 @@ impl SceneTarget {
             indirect: Indirect::None,
             max_depth: MAX_DEPTH,
         };
+        // Pass 0's pixel positions for every image: a progressive reference then converges to
+        // the image at exactly the points every sweep run samples.
         let samples = PassSamples::new(self.seed, 0, 1);
         let pass = shade_pass(
             &self.camera,
@@ -135,8 +138,8 @@ impl Target for SceneTarget {
             .unwrap_or_else(|| "scene".into())
     }
 
-    fn photons(&mut self, count: usize) -> Result<PhotonMap, SweepError> {
-        let map = self.trace(count, &ProgressBar::hidden());
+    fn photons(&mut self, count: usize, pass: u64) -> Result<PhotonMap, SweepError> {
+        let map = self.trace(count, pass, &ProgressBar::hidden());
         if map.is_empty() {
             return Err(SweepError::Target(format!(
                 "{}: no caustic photons were stored; the lights do not reach a mirror or glass \

@@ -129,6 +129,9 @@ pub struct Row {
     /// Evaluating the estimate at every pixel.
     pub estimate_seconds: f64,
     pub errors: Errors,
+    /// Passes averaged, for a row of a progressive series (cumulative times); `None` for a
+    /// one-shot run.
+    pub passes: Option<u64>,
 }
 
 impl Row {
@@ -154,7 +157,7 @@ impl Row {
 
 pub const CSV_HEADER: &str = "target,estimate,photons,k,radius,gradient_radius,diffusivity,\
 trace_seconds,prepare_seconds,estimate_seconds,total_seconds,rmse,relative_mse,edge_band_rmse,\
-flat_noise";
+flat_noise,passes";
 
 /// The rows as CSV (header first); an unused parameter is an empty cell.
 pub fn format_csv(rows: &[Row]) -> String {
@@ -164,7 +167,7 @@ pub fn format_csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{:.6},{:.6e},{:.6e},{:.6e},{:.6e}",
+            "{},{},{},{},{},{},{},{:.6},{:.6},{:.6},{:.6},{:.6e},{:.6e},{:.6e},{:.6e},{}",
             r.target.replace(',', ";"),
             r.estimate,
             r.photons,
@@ -180,6 +183,7 @@ pub fn format_csv(rows: &[Row]) -> String {
             r.errors.relative_mse,
             r.errors.edge_band_rmse,
             r.errors.flat_noise,
+            opt(r.passes.map(|p| p.to_string())),
         );
     }
     out
@@ -189,8 +193,8 @@ pub fn format_csv(rows: &[Row]) -> String {
 pub trait Target {
     /// Short name for the CSV and the plot title.
     fn name(&self) -> String;
-    /// A photon map of about `count` stored photons.
-    fn photons(&mut self, count: usize) -> Result<PhotonMap, SweepError>;
+    /// A photon map of about `count` stored photons, from pass `pass`'s random streams.
+    fn photons(&mut self, count: usize, pass: u64) -> Result<PhotonMap, SweepError>;
     /// The estimate at every pixel (scalar per pixel, row by row).
     fn evaluate(&self, map: &PhotonMap, estimate: &dyn RadianceEstimate) -> Vec<f64>;
     /// The errors of an evaluated image.
@@ -230,7 +234,7 @@ pub fn run_sweep(
     for &count in &plan.photon_counts {
         bar.set_message(format!("{count} photons: tracing"));
         let start = Instant::now();
-        let mut map = target.photons(count)?;
+        let mut map = target.photons(count, 0)?;
         let trace_seconds = start.elapsed().as_secs_f64();
         // `1x` radii follow the map, like dpm's default radius.
         let unit = k_equivalent_radius(&map, UNIT_RADIUS_K).unwrap_or(1.0);
@@ -247,6 +251,7 @@ pub fn run_sweep(
             prepare_seconds,
             estimate_seconds,
             errors,
+            passes: None,
         };
         let measure = |map: &PhotonMap, resolved: ResolvedEstimator| {
             let estimate = resolved.into_boxed();
