@@ -1,7 +1,8 @@
 //! `dpm`: diffusion based photon mapping (Schjøth, Olsen, Sparring) on Embree 3.
 //!
 //! The crate reads top to bottom as the data flows:
-//! scene description → Embree → photon tracing → photon map → radiance estimate → render → image.
+//! scene description → Embree → photon tracing → photon map → radiance estimate → render (a
+//! loop of independent passes into a film) → image.
 //! Each stage is one module; each module's opening paragraph says what it owns and what it
 //! must not touch.
 

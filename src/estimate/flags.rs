@@ -92,6 +92,16 @@ pub struct EstimatorFlags {
     #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub noise_floor: f64,
 
+    /// Fewest photons the diffusion estimate's kernel should hold (0: no bound). The ellipse
+    /// holds about N·√λ2 of the N photons in its disc, so λ2 is kept at least (m/N)²: a kernel
+    /// squeezed onto a few photons is shaped by their own noise, a bias that averaging passes
+    /// does not remove. Where discs hold few photons (a progressive render's late passes, dim
+    /// regions) the kernel turns round, and the estimate stays consistent. 8 lowered every
+    /// error of progressive diffusion at the default radius on the constructed distribution
+    /// (BENCHMARKS.md); 16 and 32 blurred edges in late passes.
+    #[arg(long, default_value_t = 8.0, allow_negative_numbers = true)]
+    pub min_kernel_photons: f64,
+
     /// Kernel of the diffusion estimate, evaluated at the Mahalanobis distance. Epanechnikov
     /// is the paper's choice and the cheapest; gaussian is Jensen's shape, exactly normalised.
     #[arg(long, value_enum, default_value_t = DiffusionKernel::Epanechnikov)]
@@ -114,6 +124,7 @@ impl EstimatorFlags {
             lambda3: self.lambda3,
             lambda2_floor: self.lambda2_floor,
             noise_floor: self.noise_floor,
+            min_kernel_photons: self.min_kernel_photons,
             kernel: self.kernel,
         }
     }

@@ -73,6 +73,8 @@ pub struct EstimatorSettings {
     pub lambda2_floor: f64,
     /// Photon noise removed from μ1, in multiples of its variance.
     pub noise_floor: f64,
+    /// Fewest photons the anisotropic kernel should hold.
+    pub min_kernel_photons: f64,
     /// Kernel of the diffusion estimate.
     pub kernel: DiffusionKernel,
 }
@@ -93,6 +95,7 @@ impl Default for EstimatorSettings {
             lambda2_floor: 0.01,
             kernel: DiffusionKernel::Epanechnikov,
             noise_floor: 2.0,
+            min_kernel_photons: 8.0,
         }
     }
 }
@@ -135,7 +138,8 @@ impl fmt::Display for ResolvedEstimator {
                 write!(
                     f,
                     "diffusion radius={} gradient-radius={} smoothing-radius={} K={} ({:?}) \
-                     alpha={} lambda3={} lambda2-floor={} noise-floor={} kernel={:?}",
+                     alpha={} lambda3={} lambda2-floor={} noise-floor={} min-kernel-photons={} \
+                     kernel={:?}",
                     p.radius,
                     p.gradient_radius,
                     p.smoothing_radius,
@@ -145,6 +149,7 @@ impl fmt::Display for ResolvedEstimator {
                     p.lambda3,
                     p.lambda2_floor,
                     p.noise_floor,
+                    p.min_kernel_photons,
                     p.kernel
                 )
             }
@@ -232,6 +237,7 @@ impl EstimatorSettings {
                 "lambda3" => self.lambda3.to_string(),
                 "lambda2-floor" => self.lambda2_floor.to_string(),
                 "noise-floor" => self.noise_floor.to_string(),
+                "min-kernel-photons" => self.min_kernel_photons.to_string(),
                 _ => String::new(),
             };
             return Err(EstimateError::InvalidSetting {
@@ -255,6 +261,7 @@ impl EstimatorSettings {
             lambda2_floor: self.lambda2_floor,
             kernel: self.kernel,
             noise_floor: self.noise_floor,
+            min_kernel_photons: self.min_kernel_photons,
         }
     }
 

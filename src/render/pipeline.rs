@@ -367,7 +367,9 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     check_memory(settings.estimator.estimator, &world, &wanted)?;
     let schedule = Schedule::new(settings.alpha, args.seed);
     let camera = &world.description.camera;
+    // The kernel field needs the diffusion estimate and a caustic map to steer it.
     let kernel_field = settings.estimator.estimator == EstimatorKind::Diffusion
+        && wanted.iter().any(|w| w.kind == MapKind::Caustic)
         && (args.kernel_field.is_some()
             || ImageFormat::from_path(&output).ok() == Some(ImageFormat::Exr));
     let header = |radii: BaseRadii| FilmHeader {
@@ -428,7 +430,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         }
         let pass_start = Instant::now();
         let maps = if pass == 0 && args.load_photons.is_some() {
-            load_maps(args, &world, scene_hash, &wanted, &mut times)?
+            load_maps(args, scene_hash, &wanted, &mut times)?
         } else {
             trace_pass_maps(&world, &settings, &schedule, pass, &mut times)
         };
@@ -605,13 +607,11 @@ pub fn relative_mse(image: &Image, reference: &Image) -> f64 {
 /// Pass 0's maps from --load-photons.
 fn load_maps(
     args: &RenderArgs,
-    world: &World,
     scene: u64,
     wanted: &[MapInfo],
     times: &mut PhaseTimes,
 ) -> Result<PassMaps, RenderError> {
     let path = args.load_photons.as_ref().expect("asked for");
-    let _ = world;
     let start = Instant::now();
     let mut file = store::read(path)?;
     file.check_fits(scene, args.seed, wanted)?;

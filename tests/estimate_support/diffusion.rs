@@ -23,6 +23,7 @@ pub fn params(r: f32) -> DiffusionParams {
         lambda2_floor: 0.01,
         kernel: DiffusionKernel::Epanechnikov,
         noise_floor: 2.0,
+        min_kernel_photons: 0.0,
     }
 }
 

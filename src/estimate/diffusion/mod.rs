@@ -88,6 +88,13 @@ pub struct DiffusionParams {
     /// Multiple `c ≥ 0` of the expected photon-noise variance of the gradient subtracted from
     /// `μ1` before the diffusivity (0: the paper's raw `μ1`). See [`gradient_noise`].
     pub noise_floor: f64,
+    /// Fewest photons the kernel should hold (≥ 0): `λ2` is kept at least `(m/N)²` with `N`
+    /// the photons in the disc, since the ellipse holds about `N √λ2` of them. A kernel
+    /// squeezed onto a handful of photons is shaped by those photons' own noise, a bias that
+    /// averaging passes does not remove; with this bound the estimate turns isotropic where a
+    /// disc holds too few photons, as a progressive render's shrinking radii eventually make
+    /// every disc. 0 turns it off.
+    pub min_kernel_photons: f64,
 }
 
 impl DiffusionParams {
@@ -120,6 +127,9 @@ impl DiffusionParams {
         }
         if !(self.noise_floor >= 0.0 && self.noise_floor.is_finite()) {
             return Err(("noise-floor", "must be zero or positive and finite"));
+        }
+        if !(self.min_kernel_photons >= 0.0 && self.min_kernel_photons.is_finite()) {
+            return Err(("min-kernel-photons", "must be zero or positive and finite"));
         }
         Ok(())
     }
@@ -198,6 +208,7 @@ impl DiffusionEstimate {
         let mut isotropic = 0.0;
         let mut second_moment = 0.0;
         let mut reader = PhotonReader::new(normal);
+        let mut inside = 0u32;
         let epanechnikov = RadialKernel::Epanechnikov.prepare().for_radius2(r2);
         let inv_rho2 = 1.0 / rho2;
         for n in scratch.neighbours.as_slice() {
@@ -209,6 +220,7 @@ impl DiffusionEstimate {
             if d2 < rho2 {
                 structure.add(gradients.get(n.slot), 1.0 - d2 * inv_rho2);
             }
+            inside += (d2 < r2) as u32;
             let w = epanechnikov.weight(d2);
             // Three times the channel mean (`gradient::scalar_power`); the thirds are taken
             // once after the loop rather than divided per photon.
@@ -225,7 +237,13 @@ impl DiffusionEstimate {
             DiffusivityUnits::Absolute => signal,
             DiffusivityUnits::Dimensionless => relative_contrast(signal, r2, isotropic),
         };
-        let lambda2 = diffusivity(contrast, p.diffusivity, p.alpha).max(p.lambda2_floor);
+        let floor = if inside == 0 {
+            1.0
+        } else {
+            let f = p.min_kernel_photons / inside as f64;
+            (f * f).clamp(p.lambda2_floor, 1.0)
+        };
+        let lambda2 = diffusivity(contrast, p.diffusivity, p.alpha).max(floor);
         let across = frame.to_world(eigen.major_vector);
         let tensor = DiffusionTensor::new(across, frame.normal, lambda2, p.lambda3);
         let shape = KernelShape {
