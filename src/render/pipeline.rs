@@ -329,6 +329,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     if let Some(path) = &args.stats {
         let json = serde_json::json!({
             "scene": args.scene,
+            "embree": embree::version_string(),
             "output": output,
             "estimator": estimator,
             "caustic": caustic_map.as_ref().map(|(m, c)| serde_json::json!({"emitted": c.emitted, "stored": c.stored, "bytes_per_photon": m.bytes_per_photon()})),
