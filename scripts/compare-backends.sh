@@ -2,7 +2,8 @@
 # Renders the torus knot and the Cornell box with both Embree backends, the same seed and
 # settings, at small sizes, and checks that the images agree within noise: relative MSE
 # Σ(a − b)² / Σ b² ≤ 1e-3 (examples/compare_images.rs), Embree 3's image as the reference.
-# Needs Embree 4 fetched first (scripts/fetch-embree4.sh; EMBREE4_DIR is honoured).
+# Needs Embree 4 fetched first (scripts/fetch-embree4.sh; EMBREE4_DIR is honoured). The two
+# binaries and the images are kept in target/backends/.
 #
 #   scripts/compare-backends.sh          (about a minute of rendering on 2 cores, plus builds)
 set -euo pipefail
@@ -35,4 +36,6 @@ for case in "${cases[@]}"; do
   printf '%s: ' "$name"
   "$out/compare_images" "$out/$name-embree4.pfm" "$out/$name-embree3.pfm" 1e-3 || status=1
 done
+# Leave target/release/dpm as the default (Embree 3) build, as `cargo build --release` would.
+cargo build --release --bin dpm
 exit $status

@@ -7,7 +7,8 @@
 #   scripts/fetch-embree4.sh [DIR]      DIR defaults to target/embree4 (where build.rs looks)
 #
 # Needs python3 with pip (Debian: apt-get install -y python3-pip); `pip download` installs
-# nothing. Running it again over a complete DIR does nothing.
+# nothing. Running it again over a complete DIR does nothing; `cargo clean` removes the default
+# DIR (it lies in target/), so fetch again after one.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 DIR=${1:-$repo/target/embree4}

@@ -16,10 +16,11 @@ pub fn build() -> Result<PathBuf, String> {
         let dir = std::env::var_os("EMBREE4_DIR")
             .map(PathBuf::from)
             .unwrap_or_else(|| manifest.join("target/embree4"));
-        if !dir.join("libembree4.so").exists() {
+        let library = dir.join("libembree4.so");
+        if !library.exists() {
             return Err(format!(
                 "Embree 4 is not fetched ({} is missing; run scripts/fetch-embree4.sh)",
-                dir.display()
+                library.display()
             ));
         }
         features = vec!["--features", "embree4"];
