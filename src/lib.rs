@@ -1,4 +1,5 @@
-//! `dpm`: diffusion based photon mapping (Schjøth, Olsen, Sparring) on Embree 3.
+//! `dpm`: diffusion based photon mapping (Schjøth, Olsen, Sparring) on Embree 3, or on Embree 4
+//! with the `embree4` feature.
 //!
 //! The crate reads top to bottom as the data flows:
 //! scene description → Embree → photon tracing → photon map → radiance estimate → render (a

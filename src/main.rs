@@ -2,14 +2,14 @@
 //! maps errors to exit codes (2 for bad input, 1 for failures inside, 130 when interrupted by
 //! Ctrl-C). No rendering logic here.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use dpm::density::DensityArgs;
 use dpm::render::pipeline::{self, RenderArgs};
 use dpm::tradeoff::TradeoffArgs;
 use dpm::tradeoff::reference::ReferenceArgs;
 use std::process::ExitCode;
 
-/// Diffusion based photon mapping (Schjøth, Olsen, Sparring) on Embree 3.
+/// Diffusion based photon mapping (Schjøth, Olsen, Sparring) on Embree.
 ///
 /// Photon mapping blurs caustics; the diffusion estimate steers an anisotropic kernel along
 /// the caustic's edges so they stay sharp while flat regions are smoothed.
@@ -43,8 +43,23 @@ enum Command {
     Reference(ReferenceArgs),
 }
 
+/// The parsed command line. `--version` also names the Embree library in use, which takes a
+/// device to ask, so only then is one made.
+fn parse() -> Cli {
+    let mut command = Cli::command();
+    if std::env::args_os().any(|a| a == "--version" || a == "-V") {
+        let version = format!(
+            "{} ({})",
+            env!("CARGO_PKG_VERSION"),
+            dpm::embree::version_string()
+        );
+        command = command.version(String::leak(version) as &str);
+    }
+    Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit())
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = parse();
     if matches!(cli.command, Command::Render(_)) {
         // Ctrl-C then stops the render cleanly, keeping any earlier output (dpm::interrupt).
         if let Err(e) = dpm::interrupt::install() {

@@ -173,6 +173,50 @@ fn bad_parameters_exit_2_naming_the_flag() {
 }
 
 #[test]
+fn absurd_thread_counts_exit_2_at_once_naming_the_flag() {
+    let f = Fixture::new();
+    let output = f.path("out.png");
+    let start = std::time::Instant::now();
+    let out = f.render(&output, &["--threads", "100000"]);
+    assert_fails(&out, 2, &["--threads 100000", "1024"], "render --threads");
+    assert!(!output.exists());
+    let (csv, svg) = (f.path("t.csv"), f.path("t.svg"));
+    let out = dpm([
+        "tradeoff".as_ref(),
+        "--quick".as_ref(),
+        "--threads".as_ref(),
+        "5000".as_ref(),
+        "--csv".as_ref(),
+        csv.as_os_str(),
+        "--svg".as_ref(),
+        svg.as_os_str(),
+    ]);
+    assert_fails(&out, 2, &["--threads 5000", "1024"], "tradeoff --threads");
+    assert!(!csv.exists() && !svg.exists());
+    // Refused before any thread is spawned, not after minutes of trying.
+    assert!(start.elapsed().as_secs() < 30, "{:?}", start.elapsed());
+    // The bound itself is allowed.
+    let out = f.render(&output, &["--threads", "1024"]);
+    assert_succeeds(&out, "render --threads 1024");
+}
+
+#[test]
+fn version_names_the_embree_in_use() {
+    let out = dpm(["--version"]);
+    assert_succeeds(&out, "dpm --version");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let major = if cfg!(feature = "embree4") { 4 } else { 3 };
+    assert!(
+        text.starts_with(&format!(
+            "dpm {} (Embree {major}.",
+            env!("CARGO_PKG_VERSION")
+        )),
+        "{text}"
+    );
+    assert!(text.contains(&dpm::embree::version_string()), "{text}");
+}
+
+#[test]
 fn bad_output_paths_exit_2() {
     let f = Fixture::new();
     #[rustfmt::skip]

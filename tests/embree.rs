@@ -1,4 +1,5 @@
-//! Rays against a triangle and a sphere, compared with analytic hits.
+//! Rays against a triangle and a sphere, compared with analytic hits, on whichever Embree
+//! backend the build has (Embree 3 by default, Embree 4 with `--features embree4`).
 
 use dpm::embree::{Device, Scene};
 use glam::Vec3;
@@ -176,4 +177,20 @@ fn committed_scene_is_shared_across_threads() {
         .map(|h| h.join().unwrap())
         .collect();
     assert!(hits.iter().all(|&h| h));
+}
+
+#[test]
+fn the_reported_version_matches_the_backend() {
+    let version = dpm::embree::version().unwrap();
+    let text = version.to_string();
+    if cfg!(feature = "embree4") {
+        assert!(text.starts_with("Embree 4."), "{text}");
+        assert_eq!(dpm::embree::BACKEND, "Embree 4");
+    } else {
+        assert!(text.starts_with("Embree 3."), "{text}");
+        assert_eq!(dpm::embree::BACKEND, "Embree 3");
+    }
+    assert_eq!(dpm::embree::version_string(), text);
+    // A second device reports the same library.
+    assert_eq!(Device::new().unwrap().version(), version);
 }

@@ -415,3 +415,29 @@ fn same_seed_same_bytes_on_one_and_two_threads() {
 fn same_seed_same_bytes_on_one_and_two_threads_committed_cornell_box() {
     assert_deterministic(&scene_with_resolution("scenes/cornell-box.toml", 24, 20));
 }
+
+#[test]
+fn stats_name_the_embree_in_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = scene_with_resolution("scenes/point-plane.toml", 8, 6);
+    let scene = write_scene(dir.path(), "plane.toml", &text);
+    let (out, stats) = (dir.path().join("plane.pfm"), dir.path().join("stats.json"));
+    let args = render_args(&[
+        path_str(&scene),
+        "-o",
+        path_str(&out),
+        "--stats",
+        path_str(&stats),
+    ]);
+    pipeline::run(&args).expect("render");
+    let text = std::fs::read_to_string(&stats).expect("the stats file");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let embree = json["embree"].as_str().expect("an \"embree\" field");
+    let backend = if cfg!(feature = "embree4") {
+        "Embree 4."
+    } else {
+        "Embree 3."
+    };
+    assert!(embree.starts_with(backend), "{embree}");
+    assert_eq!(embree, dpm::embree::version_string());
+}

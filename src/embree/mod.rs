@@ -1,14 +1,65 @@
-//! The only door to Embree: a thin safe wrapper over the Embree 3 bindings. It owns the device,
-//! error reporting, building an immutable scene from triangle meshes and spheres, and single-ray
-//! closest-hit and occlusion queries. Every Embree-3-specific call lives in this folder, so that
-//! an Embree 4 backend can sit beside it. It knows nothing of materials, lights or photons.
+//! The only door to Embree, and the only code in dpm that touches raw pointers: a thin safe
+//! wrapper that owns the device, error reporting, building an immutable scene from triangle
+//! meshes and spheres, single-ray closest-hit and occlusion queries, the Embree version in use,
+//! and the rayon pools (flush-to-zero, a bounded thread count) that trace rays. It runs on one of
+//! two backends, side by side in this folder and chosen at build time: Embree 3 (`embree3.rs` +
+//! `shim3.c`, the default) or Embree 4 (`embree4.rs` + `shim4.c`, feature `embree4`). Each backend
+//! file only names its bindings' types and constants; everything that differs in how a ray is
+//! cast lives in its C shim, which `cc` compiles against the real headers, so no Embree struct
+//! is re-typed in Rust. Nothing outside this folder knows which backend it runs on. It knows
+//! nothing of materials, lights or photons, and must not: it never reads a scene description.
 
-mod sys;
+mod threads;
+mod version;
 
+pub use threads::{
+    MAX_THREADS, ThreadPoolError, enable_flush_to_zero, flush_to_zero_enabled, thread_pool,
+};
+pub use version::{BACKEND, Version, header_version, version, version_string};
+
+#[cfg(not(feature = "embree4"))]
+#[path = "embree3.rs"]
+mod backend;
+#[cfg(feature = "embree4")]
+#[path = "embree4.rs"]
+mod backend;
+
+use backend::bindings as sys;
 use glam::Vec3;
-use std::ffi::{CStr, CString, c_void};
+use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::fmt;
 use std::sync::{Arc, Mutex};
+
+/// dpm's C shim (`shim3.c` / `shim4.c` with `shim_common.h`), built by `build.rs`.
+mod shim {
+    use super::sys::{RTCDevice, RTCRay, RTCRayHit, RTCScene};
+    use std::ffi::{c_char, c_int, c_long, c_void};
+
+    /// Where the shim forwards Embree's error callback; `struct dpm_error_sink` in C.
+    #[repr(C)]
+    pub struct ErrorSink {
+        pub record: unsafe extern "C" fn(*mut c_void, c_int, *const c_char),
+    }
+
+    unsafe extern "C" {
+        /// `rtcIntersect1` with a fresh incoherent context (3) or arguments (4).
+        pub fn dpm_rtc_intersect1(scene: RTCScene, rayhit: *mut RTCRayHit);
+        /// `rtcOccluded1` likewise.
+        pub fn dpm_rtc_occluded1(scene: RTCScene, ray: *mut RTCRay);
+        pub fn dpm_rtc_set_error_sink(device: RTCDevice, sink: *mut ErrorSink);
+        pub fn dpm_rtc_get_device_error(device: RTCDevice) -> c_int;
+        pub fn dpm_rtc_library_version(device: RTCDevice) -> c_long;
+        pub fn dpm_rtc_header_version() -> c_int;
+        #[cfg(test)]
+        pub fn dpm_rtc_sizeof_ray() -> usize;
+        #[cfg(test)]
+        pub fn dpm_rtc_sizeof_rayhit() -> usize;
+        #[cfg(test)]
+        pub fn dpm_rtc_alignof_rayhit() -> usize;
+        #[cfg(test)]
+        pub fn dpm_rtc_offsetof_hit() -> usize;
+    }
+}
 
 /// An error reported by Embree (or by this wrapper before a call would reach Embree).
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -32,16 +83,13 @@ pub enum ErrorCode {
 }
 
 impl ErrorCode {
-    fn from_raw(code: sys::RTCError) -> Option<Self> {
-        Some(match code {
-            sys::RTC_ERROR_NONE => return None,
-            sys::RTC_ERROR_INVALID_ARGUMENT => Self::InvalidArgument,
-            sys::RTC_ERROR_INVALID_OPERATION => Self::InvalidOperation,
-            sys::RTC_ERROR_OUT_OF_MEMORY => Self::OutOfMemory,
-            sys::RTC_ERROR_UNSUPPORTED_CPU => Self::UnsupportedCpu,
-            sys::RTC_ERROR_CANCELLED => Self::Cancelled,
-            _ => Self::Unknown,
-        })
+    /// `None` for `RTC_ERROR_NONE`; codes this wrapper does not list are `Unknown`.
+    fn from_raw(code: c_int) -> Option<Self> {
+        if code == backend::ERROR_NONE {
+            return None;
+        }
+        let known = backend::ERRORS.iter().find(|(raw, _)| *raw == code);
+        Some(known.map_or(Self::Unknown, |(_, name)| *name))
     }
 }
 
@@ -68,10 +116,25 @@ fn wrapper_error(message: impl Into<String>) -> EmbreeError {
 }
 
 /// The first error Embree reported since the last check. The callback writes it; `check` takes it.
-#[derive(Default)]
-struct ErrorSlot(Mutex<Option<EmbreeError>>);
+/// `sink` comes first so that the shim, given a pointer to the slot, sees a `dpm_error_sink`.
+#[repr(C)]
+struct ErrorSlot {
+    sink: shim::ErrorSink,
+    first: Mutex<Option<EmbreeError>>,
+}
 
-unsafe extern "C" fn record_error(user: *mut c_void, code: sys::RTCError, message: *const i8) {
+impl ErrorSlot {
+    fn new() -> Self {
+        Self {
+            sink: shim::ErrorSink {
+                record: record_error,
+            },
+            first: Mutex::new(None),
+        }
+    }
+}
+
+unsafe extern "C" fn record_error(user: *mut c_void, code: c_int, message: *const c_char) {
     // SAFETY: `user` is the `ErrorSlot` owned by the device's `DeviceInner`, which outlives the
     // device handle (it is dropped only after `rtcReleaseDevice`).
     let slot = unsafe { &*(user as *const ErrorSlot) };
@@ -84,7 +147,7 @@ unsafe extern "C" fn record_error(user: *mut c_void, code: sys::RTCError, messag
             .into_owned()
     };
     if let Some(code) = ErrorCode::from_raw(code) {
-        let mut guard = slot.0.lock().unwrap_or_else(|p| p.into_inner());
+        let mut guard = slot.first.lock().unwrap_or_else(|p| p.into_inner());
         guard.get_or_insert(EmbreeError { code, message });
     }
 }
@@ -104,10 +167,10 @@ impl DeviceInner {
         // Always read (and so clear) Embree's per-thread code, even when the callback has the
         // message, or a stale code would fail the next check.
         // SAFETY: `raw` is a live device.
-        let code = unsafe { sys::rtcGetDeviceError(self.raw) };
+        let code = unsafe { shim::dpm_rtc_get_device_error(self.raw) };
         let recorded = self
             .errors
-            .0
+            .first
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .take();
@@ -147,17 +210,18 @@ impl Device {
         let raw = unsafe { sys::rtcNewDevice(config.as_ptr()) };
         if raw.is_null() {
             // SAFETY: querying the error of a null device is how Embree reports creation failure.
-            let code = unsafe { sys::rtcGetDeviceError(std::ptr::null_mut()) };
+            let code = unsafe { shim::dpm_rtc_get_device_error(std::ptr::null_mut()) };
             let code = ErrorCode::from_raw(code).unwrap_or(ErrorCode::Unknown);
             return Err(EmbreeError {
                 code,
                 message: "rtcNewDevice failed".into(),
             });
         }
-        let errors = Box::new(ErrorSlot::default());
-        let user = &*errors as *const ErrorSlot as *mut c_void;
-        // SAFETY: `user` points into the box kept alive by `DeviceInner` for the device's life.
-        unsafe { sys::rtcSetDeviceErrorFunction(raw, Some(record_error), user) };
+        let errors = Box::new(ErrorSlot::new());
+        let sink = &*errors as *const ErrorSlot as *mut shim::ErrorSink;
+        // SAFETY: `sink` points to the start of the `#[repr(C)]` slot, a `dpm_error_sink`, in the
+        // box that `DeviceInner` keeps alive for the device's life; Embree only passes it back.
+        unsafe { shim::dpm_rtc_set_error_sink(raw, sink) };
         let inner = Arc::new(DeviceInner { raw, errors });
         inner.check()?;
         Ok(Self { inner })
@@ -245,22 +309,16 @@ impl SceneBuilder {
             )));
         }
         let device = self.device.clone();
-        self.attach(sys::RTC_GEOMETRY_TYPE_TRIANGLE, |g| {
-            let vertices = new_buffer::<[f32; 3]>(
-                &device,
-                g,
-                sys::RTC_BUFFER_TYPE_VERTEX,
-                sys::RTC_FORMAT_FLOAT3,
-                n,
-            )?;
+        self.attach(backend::TRIANGLE, |g| {
+            let vertices = new_buffer::<[f32; 3]>(&device, g, backend::VERTEX, backend::FLOAT3, n)?;
             for (dst, p) in vertices.iter_mut().zip(positions) {
                 *dst = p.to_array();
             }
             let indices = new_buffer::<[u32; 3]>(
                 &device,
                 g,
-                sys::RTC_BUFFER_TYPE_INDEX,
-                sys::RTC_FORMAT_UINT3,
+                backend::INDEX,
+                backend::UINT3,
                 triangles.len(),
             )?;
             indices.copy_from_slice(triangles);
@@ -280,12 +338,12 @@ impl SceneBuilder {
             return Err(wrapper_error(format!("invalid sphere {s:?}")));
         }
         let device = self.device.clone();
-        self.attach(sys::RTC_GEOMETRY_TYPE_SPHERE_POINT, |g| {
+        self.attach(backend::SPHERE_POINT, |g| {
             let points = new_buffer::<[f32; 4]>(
                 &device,
                 g,
-                sys::RTC_BUFFER_TYPE_VERTEX,
-                sys::RTC_FORMAT_FLOAT4,
+                backend::VERTEX,
+                backend::FLOAT4,
                 spheres.len(),
             )?;
             for (dst, (c, r)) in points.iter_mut().zip(spheres) {
@@ -300,8 +358,7 @@ impl SceneBuilder {
         let raw = self.raw.take().expect("scene is present until commit");
         // SAFETY: live scene; from here on it is only read.
         unsafe {
-            sys::rtcSetSceneFlags(raw, sys::RTC_SCENE_FLAG_ROBUST);
-            sys::rtcSetSceneBuildQuality(raw, sys::RTC_BUILD_QUALITY_HIGH);
+            backend::set_scene_quality(raw);
             sys::rtcCommitScene(raw);
         }
         let scene = Scene {
@@ -375,17 +432,6 @@ pub struct Hit {
     pub normal: Vec3,
 }
 
-fn context() -> sys::RTCIntersectContext {
-    // `rtcInitIntersectContext` is inline in the header, without a symbol: do what it does.
-    let mut ctx = sys::RTCIntersectContext {
-        flags: sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
-        filter: None,
-        ..Default::default()
-    };
-    ctx.instID.fill(INVALID_ID);
-    ctx
-}
-
 fn raw_ray(origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> sys::RTCRay {
     sys::RTCRay {
         org_x: origin.x,
@@ -410,7 +456,6 @@ impl Scene {
 
     /// The closest hit with `t` in `[tnear, tfar]`, if any.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> Option<Hit> {
-        let mut ctx = context();
         let mut rayhit = sys::RTCRayHit {
             ray: raw_ray(origin, dir, tnear, tfar),
             hit: sys::RTCHit {
@@ -418,8 +463,9 @@ impl Scene {
                 ..Default::default()
             },
         };
-        // SAFETY: committed scene; `ctx` and `rayhit` are valid, aligned and live for the call.
-        unsafe { sys::rtcIntersect1(self.raw, &mut ctx, &mut rayhit) };
+        // SAFETY: committed scene; `rayhit` is valid, aligned and live for the call (the shim
+        // makes the context or arguments).
+        unsafe { shim::dpm_rtc_intersect1(self.raw, &mut rayhit) };
         let h = rayhit.hit;
         (h.geomID != INVALID_ID).then(|| Hit {
             t: rayhit.ray.tfar,
@@ -433,50 +479,12 @@ impl Scene {
 
     /// Whether anything lies along the ray with `t` in `[tnear, tfar]`.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {
-        let mut ctx = context();
         let mut ray = raw_ray(origin, dir, tnear, tfar);
         // SAFETY: as in `intersect`.
-        unsafe { sys::rtcOccluded1(self.raw, &mut ctx, &mut ray) };
+        unsafe { shim::dpm_rtc_occluded1(self.raw, &mut ray) };
         // Embree sets tfar to -inf when the ray is occluded.
         ray.tfar == f32::NEG_INFINITY
     }
-}
-
-/// Sets flush-to-zero and denormals-are-zero on the calling thread, as Embree asks of every
-/// thread that traces rays.
-pub fn enable_flush_to_zero() {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let mut csr: u32 = 0;
-        // SAFETY: reads and writes this thread's MXCSR; FTZ (bit 15) and DAZ (bit 6) only change
-        // how denormals are treated.
-        unsafe {
-            std::arch::asm!("stmxcsr [{}]", in(reg) &mut csr, options(nostack));
-            csr |= (1 << 15) | (1 << 6);
-            std::arch::asm!("ldmxcsr [{}]", in(reg) &csr, options(nostack));
-        }
-    }
-}
-
-/// Whether flush-to-zero and denormals-are-zero are set on the calling thread.
-pub fn flush_to_zero_enabled() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let mut csr: u32 = 0;
-        // SAFETY: reads this thread's MXCSR.
-        unsafe { std::arch::asm!("stmxcsr [{}]", in(reg) &mut csr, options(nostack)) };
-        csr & ((1 << 15) | (1 << 6)) == (1 << 15) | (1 << 6)
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    true
-}
-
-/// A rayon pool whose workers all run with flush-to-zero set. `threads = 0` means all cores.
-pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .start_handler(|_| enable_flush_to_zero())
-        .build()
 }
 
 #[cfg(test)]
@@ -489,15 +497,9 @@ mod tests {
         let mut builder = device.scene_builder().unwrap();
         // An index buffer in a vertex format: Embree itself refuses it.
         let err = builder
-            .attach(sys::RTC_GEOMETRY_TYPE_TRIANGLE, |g| {
-                new_buffer::<[f32; 4]>(
-                    &device.inner,
-                    g,
-                    sys::RTC_BUFFER_TYPE_INDEX,
-                    sys::RTC_FORMAT_FLOAT4,
-                    1,
-                )
-                .map(|_| ())
+            .attach(backend::TRIANGLE, |g| {
+                new_buffer::<[f32; 4]>(&device.inner, g, backend::INDEX, backend::FLOAT4, 1)
+                    .map(|_| ())
             })
             .unwrap_err();
         assert_ne!(err.code, ErrorCode::Wrapper, "{err}");
@@ -512,9 +514,24 @@ mod tests {
     }
 
     #[test]
-    fn flush_to_zero_is_set_on_every_pool_worker() {
-        let pool = thread_pool(2).unwrap();
-        let all = pool.broadcast(|_| flush_to_zero_enabled());
-        assert!(all.iter().all(|&b| b));
+    fn the_rays_rust_allocates_have_the_layout_the_c_compiler_gives_them() {
+        // SAFETY: the shim's size queries return constants.
+        let c = unsafe {
+            (
+                shim::dpm_rtc_sizeof_ray(),
+                shim::dpm_rtc_sizeof_rayhit(),
+                shim::dpm_rtc_alignof_rayhit(),
+                shim::dpm_rtc_offsetof_hit(),
+            )
+        };
+        let rust = (
+            std::mem::size_of::<sys::RTCRay>(),
+            std::mem::size_of::<sys::RTCRayHit>(),
+            std::mem::align_of::<sys::RTCRayHit>(),
+            std::mem::offset_of!(sys::RTCRayHit, hit),
+        );
+        assert_eq!(rust, c);
+        // Embree 3.13 and the 4.2 headers agree (4.4's larger `RTCHit` is the shim's business).
+        assert_eq!(c, (48, 80, 16, 48));
     }
 }

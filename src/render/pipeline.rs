@@ -559,6 +559,7 @@ fn write_outputs(
 fn write_stats(path: &Path, args: &RenderArgs, outcome: &RenderOutcome) -> Result<(), RenderError> {
     let json = serde_json::json!({
         "scene": args.scene,
+        "embree": embree::version_string(),
         "output": outcome.output,
         "estimator": outcome.estimator,
         "passes": outcome.film.passes().count(),
