@@ -27,6 +27,12 @@ fn args(scene: &Path, output: &Path, extra: &[&str]) -> RenderArgs {
         output.display().to_string(),
     ];
     all.extend(extra.iter().map(|s| s.to_string()));
+    if !extra
+        .iter()
+        .any(|a| ["--passes", "--save-photons"].contains(a))
+    {
+        all.extend(["--passes".to_string(), "1".to_string()]);
+    }
     Cli::parse_from(all).args
 }
 

@@ -479,3 +479,28 @@ fn dimensionless_diffusivity_holds_as_the_radius_shrinks() {
         );
     }
 }
+
+/// The defaults chosen by measurement (README, "Choosing the defaults"): 8 passes of 100,000
+/// caustic and 50,000 global photons, the global map shown directly; one pass with a photon
+/// map file; as many as the budget holds with --time alone.
+#[test]
+fn a_default_render_is_eight_progressive_passes() {
+    use clap::Parser;
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: pipeline::RenderArgs,
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let out = dir.path().join("d.pfm");
+    let args = Cli::parse_from(["dpm", path_str(&scene), "-o", path_str(&out)]).args;
+    assert_eq!(
+        (args.caustic_photons, args.final_gather, args.spp),
+        (100_000, 0, 1)
+    );
+    let o = pipeline::run(&args).expect("render");
+    assert_eq!(o.film.passes().ranges(), &[(0, 8)]);
+    assert_eq!(o.film.header.settings.global_photons, 50_000);
+    assert_eq!(o.caustic.map(|c| c.stored), Some(100_000));
+}

@@ -51,7 +51,8 @@ pub struct RenderArgs {
 
     /// Progressive passes to render. Each traces fresh photons, shrinks every radius by
     /// r²(i+1) = r²(i)·(i+α)/(i+1) and renders fresh pixel samples; the image is their mean,
-    /// and converges as passes accumulate. With --time: at most this many.
+    /// and converges as passes accumulate. Default: 8 (1 with --save-photons or
+    /// --load-photons; with --time, as many as the budget holds).
     #[arg(long, allow_negative_numbers = true)]
     pub passes: Option<u64>,
 
@@ -110,18 +111,20 @@ pub struct RenderArgs {
     /// Photons STORED in each pass's caustic map (light → specular+ → diffuse); paths are
     /// emitted until this many are stored. Only built when the scene has a mirror or glass
     /// object; 0 turns caustics off.
-    #[arg(long, default_value_t = 1_000_000, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = DEFAULT_CAUSTIC_PHOTONS, allow_negative_numbers = true)]
     pub caustic_photons: usize,
 
-    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 200000 when
+    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 50000 when
     /// the scene has two or more diffuse objects (so diffuse light can bounce between them),
     /// else 0 (no global map: a lone plane cannot light itself).
     #[arg(long, allow_negative_numbers = true)]
     pub global_photons: Option<usize>,
 
-    /// Final-gather rays per diffuse eye hit for indirect light; 0 shows the global map's
-    /// estimate directly instead (faster, blotchier).
-    #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
+    /// Final-gather rays per diffuse eye hit for indirect light; 0 (the default) shows the
+    /// global map's estimate directly: over progressive passes its blotches average out and
+    /// its corner darkening shrinks with the radius, and it reached every error sooner than
+    /// 1 or 4 gather rays did (README, "Choosing the defaults").
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub final_gather: u32,
 
     /// Photons per global-map estimate (constant kernel, k-th photon left out).
@@ -280,19 +283,19 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
     }
     let last = args
         .first_pass
-        .checked_add(args.passes.unwrap_or(1))
+        .checked_add(pass_count(args))
         .filter(|l| *l <= MAX_PASSES);
     if last.is_none() {
         return invalid(format!(
             "--first-pass {} with --passes {}: a render holds at most {MAX_PASSES} passes",
             args.first_pass,
-            args.passes.unwrap_or(1)
+            pass_count(args)
         ));
     }
     if args.resume.is_some() && args.first_pass != 0 {
         return invalid("--resume continues where its film ends; drop --first-pass".into());
     }
-    let one_pass = args.passes.unwrap_or(1) == 1 && args.time.is_none() && args.first_pass == 0;
+    let one_pass = pass_count(args) == 1 && args.time.is_none() && args.first_pass == 0;
     if (args.load_photons.is_some() || args.save_photons.is_some()) && !one_pass {
         return invalid(
             "--save-photons and --load-photons hold one pass's maps: use them with one pass \
@@ -323,6 +326,25 @@ pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
     pool.install(|| run_in_pool(args, output))
 }
 
+/// Passes per render by default: chosen by measurement (README, "Choosing the defaults").
+pub const DEFAULT_PASSES: u64 = 8;
+/// Stored caustic photons per pass by default.
+pub const DEFAULT_CAUSTIC_PHOTONS: usize = 100_000;
+/// Stored global photons per pass by default (scenes with two or more diffuse objects).
+pub const DEFAULT_GLOBAL_PHOTONS: usize = 50_000;
+
+/// The passes asked for: --passes, else one for a photon-map file's single pass, else the
+/// default (with --time and no --passes the budget decides instead).
+fn pass_count(args: &RenderArgs) -> u64 {
+    args.passes.unwrap_or(
+        if args.save_photons.is_some() || args.load_photons.is_some() {
+            1
+        } else {
+            DEFAULT_PASSES
+        },
+    )
+}
+
 /// The settings every pass of this render uses.
 fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let diffuse_objects = world
@@ -340,7 +362,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     RenderSettings {
         caustic_photons: args.caustic_photons,
         global_photons: args.global_photons.unwrap_or(if diffuse_objects >= 2 {
-            200_000
+            DEFAULT_GLOBAL_PHOTONS
         } else {
             0
         }),
@@ -411,9 +433,10 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         radii = Some(BaseRadii::resolve(&settings, &maps)?);
     }
 
-    let limit = args
-        .passes
-        .unwrap_or(if args.time.is_some() { MAX_PASSES } else { 1 });
+    let limit = match (args.passes, args.time) {
+        (None, Some(_)) => MAX_PASSES,
+        _ => pass_count(args),
+    };
     let last = (first + limit).min(MAX_PASSES);
     let bar = progress(last - first, "passes");
     let mut records: Vec<PassRecord> = Vec::new();

@@ -35,12 +35,26 @@ struct Cli {
     args: RenderArgs,
 }
 
-/// `dpm render` arguments, parsed exactly as the command line parses them.
+/// `dpm render` arguments, parsed exactly as the command line parses them. One pass unless the
+/// test names its passes: these tests check one pass's image (tests/progressive.rs checks
+/// several, and the default count).
 pub fn render_args(args: &[&str]) -> RenderArgs {
-    let argv = std::iter::once("dpm").chain(args.iter().copied());
+    let argv = std::iter::once("dpm")
+        .chain(args.iter().copied())
+        .chain(one_pass_unless_named(args));
     Cli::try_parse_from(argv)
         .unwrap_or_else(|e| panic!("bad test arguments {args:?}: {e}"))
         .args
+}
+
+/// `--passes 1` unless `args` already say how many passes to render.
+pub fn one_pass_unless_named(args: &[&str]) -> Vec<&'static str> {
+    let named = ["--passes", "--time", "--save-photons", "--load-photons"];
+    if args.iter().any(|a| named.contains(a)) {
+        Vec::new()
+    } else {
+        vec!["--passes", "1"]
+    }
 }
 
 pub fn repo_path(relative: &str) -> PathBuf {
