@@ -257,7 +257,8 @@ pub fn describe(reference: &Reference, settings: ReferenceSettings) -> String {
     }
     let (r0, r1) = reference.radius.unwrap_or_default();
     format!(
-        "reference: rendered {} ({what}; radius {r0:.5} -> {r1:.5}; the last half of the passes          moved it by a relative MSE of {}; {:.1} s)",
+        "reference: rendered {} ({what}; radius {r0:.5} -> {r1:.5}; the last half of the passes \
+         moved it by a relative MSE of {}; {:.1} s)",
         reference.path.display(),
         reference
             .half_change
