@@ -3,7 +3,8 @@
 //! own photon maps, prepares its estimates, shades fresh camera samples ([`camera`]) through
 //! the [`integrator`] and drops its maps; the [`film`] accumulates the passes' images and is
 //! what gets written ([`output`], [`film_file`]) and merged ([`merge`]). [`pipeline`] is the
-//! command line around that loop, with its up-front memory check ([`memory_budget`]). Owns
+//! command line around that loop, with its up-front memory check ([`memory_budget`]) and pass 0's
+//! photon map files ([`photon_files`]). Owns
 //! pixels, sample placement and accumulation; must not parse scenes or store photons.
 
 pub mod camera;
@@ -14,6 +15,7 @@ pub mod memory_budget;
 pub mod merge;
 pub mod output;
 pub mod pass;
+pub mod photon_files;
 pub mod pipeline;
 pub mod schedule;
 

@@ -14,13 +14,14 @@ use super::film::{Film, FilmHeader};
 use super::film_file::{self, FilmFileError};
 use super::memory_budget::check_memory;
 use super::output::{write_film_image, write_kernel_field};
-use super::pass::{BaseRadii, PassContext, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
+use super::pass::{BaseRadii, PassContext, RenderSettings, trace_pass_maps, wanted_maps};
+use super::photon_files::{load_maps, save_maps, validate_photon_files};
 use super::schedule::{DEFAULT_ALPHA, MAX_PASSES, Schedule};
 use crate::embree::{self, EmbreeError};
 use crate::estimate::EstimatorFlags;
 use crate::estimate::settings::{EstimateError, EstimatorKind};
 use crate::image_io::{self, Image, ImageError, ImageFormat};
-use crate::photon::store::{self, MapInfo, StoreError};
+use crate::photon::store::{self, StoreError};
 use crate::photon::tracer::{MapKind, TraceCounts};
 use crate::scene::{self, Material, SceneError};
 use crate::timing::{PhaseTimes, progress};
@@ -628,66 +629,6 @@ pub fn relative_mse(image: &Image, reference: &Image) -> f64 {
     crate::tradeoff::scene_metrics::relative_mse(&mean(image), &mean(reference))
 }
 
-/// Pass 0's maps from --load-photons.
-fn load_maps(
-    args: &RenderArgs,
-    scene: u64,
-    wanted: &[MapInfo],
-    times: &mut PhaseTimes,
-) -> Result<PassMaps, RenderError> {
-    let path = args.load_photons.as_ref().expect("asked for");
-    let start = Instant::now();
-    let mut file = store::read(path)?;
-    file.check_fits(scene, args.seed, wanted)?;
-    let with_counts = |map: crate::photon::PhotonMap| {
-        let counts = TraceCounts {
-            emitted: map.emitted,
-            stored: map.len() as u64,
-        };
-        (map, counts)
-    };
-    let maps = PassMaps {
-        caustic: file.take(MapKind::Caustic).map(with_counts),
-        global: file
-            .take(MapKind::Global { with_direct: false })
-            .map(with_counts),
-    };
-    let stored = |m: &Option<(crate::photon::PhotonMap, TraceCounts)>| {
-        m.as_ref().map_or(0, |(_, c)| c.stored)
-    };
-    times.record(
-        "load photons",
-        start.elapsed(),
-        &[
-            ("caustic", stored(&maps.caustic)),
-            ("global", stored(&maps.global)),
-        ],
-    );
-    Ok(maps)
-}
-
-/// Saves pass 0's maps to --save-photons.
-fn save_maps(
-    path: &Path,
-    scene: u64,
-    seed: u64,
-    wanted: &[MapInfo],
-    maps: &PassMaps,
-    times: &mut PhaseTimes,
-) -> Result<(), RenderError> {
-    let start = Instant::now();
-    let list: Vec<(MapInfo, &crate::photon::PhotonMap)> = wanted
-        .iter()
-        .zip(maps.caustic.iter().chain(maps.global.iter()))
-        .map(|(info, (map, _))| (*info, map))
-        .collect();
-    let bytes = store::write(path, scene, seed, &list)?;
-    times.record("save photons", start.elapsed(), &[("bytes", bytes)]);
-    Ok(())
-}
-
-// ---- Input checks shared with the one-shot days: photon files and load reports ----
-
 /// What loading repaired or suspects: warnings on stderr, dropped triangles in the table.
 fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseTimes) {
     for warning in &report.warnings {
@@ -697,44 +638,4 @@ fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseT
         let dropped = report.degenerate_triangles_dropped as u64;
         times.add_counts("load scene", &[("zero-area triangles dropped", dropped)]);
     }
-}
-
-/// Checks `--save-photons` / `--load-photons` before any work: a file to load exists, a file
-/// to save goes to an existing directory and is not the output image.
-fn validate_photon_files(args: &RenderArgs, output: &Path) -> Result<(), RenderError> {
-    if let Some(path) = &args.load_photons {
-        if !path.is_file() {
-            let why = if path.exists() {
-                "is not a file"
-            } else {
-                "does not exist"
-            };
-            return Err(RenderError::Invalid(format!(
-                "--load-photons {}: {why}",
-                path.display()
-            )));
-        }
-    }
-    if let Some(path) = &args.save_photons {
-        if path == output {
-            return Err(RenderError::Invalid(format!(
-                "--save-photons {}: is also the output image",
-                path.display()
-            )));
-        }
-        if path.is_dir() {
-            return Err(RenderError::Invalid(format!(
-                "--save-photons {}: is a directory",
-                path.display()
-            )));
-        }
-        if let Some(dir) = image_io::missing_output_directory(path) {
-            return Err(RenderError::Invalid(format!(
-                "--save-photons {}: directory {} does not exist",
-                path.display(),
-                dir.display()
-            )));
-        }
-    }
-    Ok(())
 }
