@@ -468,7 +468,11 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
                 saved_photons = Some(path.clone());
             }
         }
-        let radii = *radii.get_or_insert(BaseRadii::resolve(&settings, &maps)?);
+        // Pass 0's maps resolve the base radii; later passes only scale them.
+        let radii = match radii {
+            Some(r) => r,
+            None => *radii.insert(BaseRadii::resolve(&settings, &maps)?),
+        };
         let film = film.get_or_insert_with(|| Film::new(header(radii)));
         let context = PassContext {
             world: &world,
