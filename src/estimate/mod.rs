@@ -47,6 +47,10 @@ pub struct Query {
 pub struct Scratch {
     pub neighbours: Neighbours,
     pub second: Neighbours,
+    /// The diffusion estimate's kernel inputs: offset from the query and power of each
+    /// agreeing photon within the radius, gathered once by its analysis and summed by its
+    /// kernel without reading the map again.
+    pub kernel_inputs: Vec<(Vec3, glam::DVec3)>,
 }
 
 pub trait RadianceEstimate: Send + Sync {

@@ -208,9 +208,10 @@ impl DiffusionEstimate {
         let mut isotropic = 0.0;
         let mut second_moment = 0.0;
         let mut reader = PhotonReader::new(normal);
-        let mut inside = 0u32;
         let epanechnikov = RadialKernel::Epanechnikov.prepare().for_radius2(r2);
         let inv_rho2 = 1.0 / rho2;
+        let inputs = &mut scratch.kernel_inputs;
+        inputs.clear();
         for n in scratch.neighbours.as_slice() {
             let photon = map.attributes(n.slot);
             if !reader.agrees(photon) {
@@ -220,11 +221,13 @@ impl DiffusionEstimate {
             if d2 < rho2 {
                 structure.add(gradients.get(n.slot), 1.0 - d2 * inv_rho2);
             }
-            inside += (d2 < r2) as u32;
+            let power = power_of(photon);
+            if d2 < r2 {
+                inputs.push((map.position(n.slot) - query.position, power));
+            }
             let w = epanechnikov.weight(d2);
             // Three times the channel mean (`gradient::scalar_power`); the thirds are taken
             // once after the loop rather than divided per photon.
-            let power = power_of(photon);
             let phi3 = power.x + power.y + power.z;
             isotropic += w * phi3;
             second_moment += w * phi3 * phi3;
@@ -237,6 +240,7 @@ impl DiffusionEstimate {
             DiffusivityUnits::Absolute => signal,
             DiffusivityUnits::Dimensionless => relative_contrast(signal, r2, isotropic),
         };
+        let inside = inputs.len();
         let floor = if inside == 0 {
             1.0
         } else {
@@ -306,19 +310,11 @@ impl RadianceEstimate for DiffusionEstimate {
         let (tensor, _) = self.analyse(map, query, scratch);
         let kernel = self.params.kernel.radial().prepare();
         let r2 = sq(self.params.radius);
-        let x = query.position;
-        let mut reader = PhotonReader::new(tensor.x3.as_vec3());
         let metric = tensor.metric(r2);
+        // The photons the analysis kept: within r, on the query's surface (its normal is X3).
         let mut sum = DVec3::ZERO;
-        for n in scratch.neighbours.as_slice() {
-            if n.dist2 as f64 >= r2 {
-                continue;
-            }
-            let photon = map.attributes(n.slot);
-            if reader.agrees(photon) {
-                let d = (map.position(n.slot) - x).as_dvec3();
-                sum += kernel.weight(metric.distance(d)) * power_of(photon);
-            }
+        for (d, power) in &scratch.kernel_inputs {
+            sum += kernel.weight(metric.distance(d.as_dvec3())) * *power;
         }
         to_irradiance(sum * (tensor.plane_normalisation() / r2))
     }
