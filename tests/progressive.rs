@@ -260,18 +260,21 @@ fn a_time_budget_shorter_than_a_pass_runs_one_pass_and_says_so() {
             .contains("shorter than one pass")
     );
     // A budget of several passes stops before overrunning it.
-    let budget = 4.0 * o.passes[0].seconds + 0.5;
+    let budget = 8.0 * o.passes[0].seconds + 1.0;
     let o = render(
         &scene,
         &dir.path().join("t2.pfm"),
-        &["--time", &budget.to_string(), "--passes", "50"],
+        &["--time", &budget.to_string(), "--passes", "100000"],
     );
     let n = o.film.passes().count();
-    assert!((2..50).contains(&n), "{n} passes in {budget} s");
+    assert!((2..100_000).contains(&n), "{n} passes in {budget} s");
+    // A pass starts only while the elapsed time plus the mean pass time fits the budget, so
+    // the run ends within one pass of it, however loaded the machine.
+    let longest = o.passes.iter().map(|p| p.seconds).fold(0.0, f64::max);
+    let last = o.passes.last().unwrap();
     assert!(
-        o.passes.last().unwrap().elapsed <= budget * 1.5,
-        "{:?}",
-        o.passes.last()
+        last.elapsed <= budget + longest + 1e-3,
+        "{last:?} (budget {budget})"
     );
 }
 
