@@ -136,6 +136,40 @@ impl Fixture {
     }
 }
 
+/// `dpm merge` refuses what is not a film, a missing film, and an output it cannot write,
+/// exit 2 naming the file.
+#[test]
+fn merge_refuses_bad_films_naming_them() {
+    let f = Fixture::new();
+    let not_a_film = f.path("not.film");
+    std::fs::write(&not_a_film, b"PF\n1 1\n-1.0\n000000000000").unwrap();
+    let out = f.path("m.png");
+    let run = |args: &[&str]| dpm([&["merge"][..], args].concat());
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &[not_a_film.to_str().unwrap(), "-o", out.to_str().unwrap()],
+            &["not.film", "not a dpm film"],
+        ),
+        (
+            &["/no/such.film", "-o", out.to_str().unwrap()],
+            &["/no/such.film"],
+        ),
+        (
+            &[not_a_film.to_str().unwrap(), "-o", "/no/such/dir/m.png"],
+            &["/no/such/dir"],
+        ),
+        (
+            &[not_a_film.to_str().unwrap(), "-o", "m.bmp"],
+            &["m.bmp", "extension"],
+        ),
+    ];
+    for (args, fragments) in cases {
+        let o = run(args);
+        assert_fails(&o, 2, fragments, &format!("merge {args:?}"));
+        assert!(!out.exists());
+    }
+}
+
 #[test]
 fn bad_parameters_exit_2_naming_the_flag() {
     let f = Fixture::new();
@@ -164,6 +198,19 @@ fn bad_parameters_exit_2_naming_the_flag() {
         (&["--estimator", "magic"], &["'magic'", "--estimator"]),
         (&["--load-photons", "/no/such/file.photons"], &["--load-photons /no/such/file.photons", "does not exist"]),
         (&["--save-photons", "/no/such/dir/x.photons"], &["--save-photons", "/no/such/dir", "does not exist"]),
+        (&["--passes", "0"], &["--passes 0", "at least one pass"]),
+        (&["--passes", "-2"], &["'-2'", "--passes"]),
+        (&["--time", "0"], &["--time 0", "positive"]),
+        (&["--time", "NaN"], &["--time NaN", "positive"]),
+        (&["--time", "-5"], &["--time -5", "positive"]),
+        (&["--ppm-alpha", "1"], &["--ppm-alpha 1", "(0, 1)"]),
+        (&["--ppm-alpha", "0"], &["--ppm-alpha 0", "(0, 1)"]),
+        (&["--write-every", "-1"], &["--write-every -1"]),
+        (&["--min-kernel-photons", "-1"], &["--min-kernel-photons -1"]),
+        (&["--first-pass", "999999", "--passes", "5"], &["--first-pass 999999", "1000000 passes"]),
+        (&["--resume", "/no/such/film"], &["--resume /no/such/film", "does not exist"]),
+        (&["--passes", "4", "--save-photons", "x.photons"], &["--save-photons", "one pass"]),
+        (&["--reference", "/no/such/ref.pfm"], &["--reference /no/such/ref.pfm", "does not exist"]),
     ];
     for (args, fragments) in cases {
         let out = f.render(&output, args);

@@ -100,6 +100,12 @@ pub fn run(args: &MergeArgs) -> Result<MergeOutcome, MergeError> {
             args.output.display()
         )));
     }
+    if let Some(p) = args.films.iter().find(|p| !p.is_file()) {
+        return Err(MergeError::Invalid(format!(
+            "{}: no such film (or not a file)",
+            p.display()
+        )));
+    }
     let mut merged = film_file::read(&args.films[0])?;
     // Which file brought which passes, to name the one a clashing pass came from.
     let mut holders = vec![(args.films[0].clone(), merged.passes().clone())];

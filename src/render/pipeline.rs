@@ -311,9 +311,20 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
             }
         }
     }
-    if let Some(path) = &args.resume {
-        if !path.is_file() {
-            return invalid(format!("--resume {}: does not exist", path.display()));
+    for (flag, path) in [("--resume", &args.resume), ("--reference", &args.reference)] {
+        if let Some(p) = path.as_ref().filter(|p| !p.is_file()) {
+            return invalid(format!("{flag} {}: does not exist", p.display()));
+        }
+    }
+    if let Some(p) = &args.reference {
+        if !matches!(
+            ImageFormat::from_path(p)?,
+            ImageFormat::Pfm | ImageFormat::Exr
+        ) {
+            return invalid(format!(
+                "--reference {}: must be a .pfm or .exr image",
+                p.display()
+            ));
         }
     }
     validate_photon_files(args, &output)?;
