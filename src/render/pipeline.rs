@@ -450,7 +450,12 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         _ => pass_count(args),
     };
     let last = (first + limit).min(MAX_PASSES);
-    let bar = progress(last - first, "passes");
+    // Passes done of N; with a budget and no pass count, seconds elapsed of the budget.
+    let budget_bar = args.time.filter(|_| args.passes.is_none());
+    let bar = match budget_bar {
+        Some(t) => progress(t.ceil() as u64, "seconds of budget"),
+        None => progress(last - first, "passes"),
+    };
     let mut records: Vec<PassRecord> = Vec::new();
     let mut last_report = None;
     let mut last_write: Option<Instant> = None;
@@ -518,7 +523,10 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
                 args.time.unwrap_or_default()
             ));
         }
-        bar.inc(1);
+        match budget_bar {
+            Some(_) => bar.set_position(run_start.elapsed().as_secs()),
+            None => bar.inc(1),
+        }
         bar.set_message(pass_message(film, &records, &last_report));
         let due =
             last_write.is_none_or(|t| t.elapsed() >= Duration::from_secs_f64(args.write_every));
