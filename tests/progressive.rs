@@ -507,3 +507,72 @@ fn a_default_render_is_eight_progressive_passes() {
     assert_eq!(o.film.header.settings.global_photons, 50_000);
     assert_eq!(o.caustic.map(|c| c.stored), Some(100_000));
 }
+
+/// A shard that does not start at pass 0 with every radius given (no global map, `--radius`)
+/// traces nothing for pass 0, and still renders exactly the passes of one run.
+#[test]
+fn a_shard_with_given_radii_matches_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let d = |n: &str| dir.path().join(n);
+    let given = [
+        "--global-photons",
+        "0",
+        "--estimator",
+        "epanechnikov",
+        "--radius",
+        "0.05",
+    ];
+    // FAST with its global photons left out (`given` sets them to 0).
+    let render = |scene: &Path, out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            path_str(scene),
+            "-o",
+            path_str(out),
+            "--caustic-photons",
+            "20000",
+        ];
+        args.extend_from_slice(extra);
+        pipeline::run(&render_args(&args)).unwrap_or_else(|e| panic!("{args:?}: {e}"))
+    };
+    let whole = render(
+        &scene,
+        &d("w.pfm"),
+        &[&given[..], &["--passes", "2"]].concat(),
+    );
+    let shard = render(
+        &scene,
+        &d("s.pfm"),
+        &[
+            &given[..],
+            &["--first-pass", "1", "--film", path_str(&d("s.film"))],
+        ]
+        .concat(),
+    );
+    // Pass 0 was not traced: one tracing phase, with one pass's photons.
+    let traced: Vec<_> = shard
+        .times
+        .phases
+        .iter()
+        .filter(|p| p.name.starts_with("trace"))
+        .collect();
+    assert_eq!(traced.len(), 1);
+    assert!(
+        traced[0].counts.contains(&("stored".to_string(), 20_000)),
+        "{traced:?}"
+    );
+    let first = render(
+        &scene,
+        &d("f.pfm"),
+        &[&given[..], &["--film", path_str(&d("f.film"))]].concat(),
+    );
+    assert_eq!(first.film.passes().ranges(), &[(0, 1)]);
+    let merged = merge::run(&merge_args(
+        &[&d("f.film"), &d("s.film")],
+        &d("m.pfm"),
+        None,
+    ))
+    .expect("merge");
+    let diff = max_relative_difference(whole.film.sums(), merged.film.sums());
+    assert!(diff <= 1e-6, "shard differs from one run by {diff}");
+}

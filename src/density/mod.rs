@@ -303,6 +303,8 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     let mut distribution = None;
     let mut truth = None;
     for pass in 0..args.passes {
+        // Only the last pass's map is kept (for the kernel field): free the previous one first.
+        drop(last_map.take());
         let start = Instant::now();
         let source = load_photons_with_seed(args, schedule.seed(pass))?;
         photon_count = source.photons.len();

@@ -14,7 +14,7 @@ use super::film::{Film, FilmHeader};
 use super::film_file::{self, FilmFileError};
 use super::memory_budget::check_memory;
 use super::output::{write_film_image, write_kernel_field};
-use super::pass::{BaseRadii, PassContext, RenderSettings, trace_pass_maps, wanted_maps};
+use super::pass::{BaseRadii, PassContext, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
 use super::photon_files::{load_maps, save_maps, validate_photon_files};
 use super::schedule::{DEFAULT_ALPHA, MAX_PASSES, Schedule};
 use crate::embree::{self, EmbreeError};
@@ -440,8 +440,18 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     let mut saved_photons = None;
     let mut radii = film.as_ref().map(|f| f.header.radii);
     if radii.is_none() && first > 0 {
-        // A run that does not start at pass 0 needs pass 0's radii: trace its maps once.
-        let maps = trace_pass_maps(&world, &settings, &schedule, 0, &mut times);
+        // A run that does not start at pass 0 needs pass 0's radii: given ones need no maps,
+        // derived ones need pass 0's, traced once.
+        let given = settings.estimator.radius.is_some()
+            || !wanted.iter().any(|w| w.kind == MapKind::Caustic);
+        let global = wanted
+            .iter()
+            .any(|w| matches!(w.kind, MapKind::Global { .. }));
+        let maps = if given && !global {
+            PassMaps::default()
+        } else {
+            trace_pass_maps(&world, &settings, &schedule, 0, &mut times)
+        };
         radii = Some(BaseRadii::resolve(&settings, &maps)?);
     }
 
@@ -456,6 +466,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         Some(t) => progress(t.ceil() as u64, "seconds of budget"),
         None => progress(last - first, "passes"),
     };
+    let pinhole = PinholeCamera::new(camera);
     let mut records: Vec<PassRecord> = Vec::new();
     let mut last_report = None;
     let mut last_write: Option<Instant> = None;
@@ -492,7 +503,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         let film = film.get_or_insert_with(|| Film::new(header(radii)));
         let context = PassContext {
             world: &world,
-            camera: PinholeCamera::new(camera),
+            camera: pinhole,
             settings: &settings,
             radii,
             schedule,
