@@ -4,12 +4,11 @@
 
 mod estimate_support;
 
-use dpm::estimate::diffusion::{compute_gradients, gradient_pass};
+use dpm::estimate::diffusion::compute_gradients;
 use dpm::estimate::{
     DiffusionEstimate, DiffusionKernel, DiffusivityUnits, FixedRadiusEstimate, Query, RadialKernel,
     RadianceEstimate, Scratch,
 };
-use dpm::photon::map::PackedGradients;
 use dpm::photon::{Photon, PhotonMap};
 use estimate_support::diffusion::*;
 use estimate_support::*;
@@ -351,19 +350,22 @@ fn gradient_pass_is_deterministic_and_prepare_reuses_it() {
     let serial = one_thread.install(|| compute_gradients(&map, 0.5));
     assert_eq!(serial, compute_gradients(&map, 0.5));
     assert!(serial.iter().any(|g| g.x.abs() > 0.0));
-    gradient_pass(&mut map, 0.5);
-    let packed = PackedGradients::pack(&serial);
-    assert_eq!(map.gradients(), Some(&packed));
+    let at_half = with(1.0, |p| p.gradient_radius = 0.5);
+    at_half.gradient_pass(&mut map);
+    let field = map.gradients().unwrap().clone();
+    // A map this small is nowhere thinned: every photon is a site, weight 1.
+    assert_eq!(field.gradients(), serial);
+    assert!(field.weights().iter().all(|&w| w == 1.0));
     // prepare finds the gradients and leaves them (a caller may time the pass on its own).
-    with(1.0, |p| p.gradient_radius = 0.5).prepare(&mut map);
-    assert_eq!(map.gradients(), Some(&packed));
+    at_half.prepare(&mut map);
+    assert_eq!(map.gradients(), Some(&field));
     assert_eq!(map.gradient_radius(), Some(0.5));
     // Gradients of another radius are never read: prepare takes them again at its own.
     with(1.0, |p| p.gradient_radius = 0.25).prepare(&mut map);
     assert_eq!(map.gradient_radius(), Some(0.25));
     assert_eq!(
-        map.gradients(),
-        Some(&PackedGradients::pack(&compute_gradients(&map, 0.25)))
+        map.gradients().unwrap().gradients(),
+        compute_gradients(&map, 0.25)
     );
 }
 

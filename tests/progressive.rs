@@ -452,7 +452,7 @@ fn dimensionless_diffusivity_holds_as_the_radius_shrinks() {
         let ResolvedEstimator::Diffusion(d) = settings.resolve(&map).unwrap() else {
             panic!("diffusion")
         };
-        dpm::estimate::diffusion::gradient_pass(&mut map, d.gradient_radius());
+        d.gradient_pass(&mut map);
         let mut scratch = Scratch::default();
         let mean_lambda2 = |xs: &[f32], scratch: &mut Scratch| {
             let mut sum = 0.0;

@@ -51,6 +51,9 @@ pub struct Scratch {
     /// agreeing photon within the radius, gathered once by its analysis and summed by its
     /// kernel without reading the map again.
     pub kernel_inputs: Vec<(Vec3, glam::DVec3)>,
+    /// The diffusion estimate's leaf runs of slots whose photons all lie on the query's
+    /// surface: its kernel streams them again instead of copying each photon out.
+    pub kernel_runs: Vec<diffusion::LeafRun>,
 }
 
 pub trait RadianceEstimate: Send + Sync {

@@ -75,6 +75,9 @@ pub struct EstimatorSettings {
     pub noise_floor: f64,
     /// Fewest photons the anisotropic kernel should hold.
     pub min_kernel_photons: f64,
+    /// Gradient sites a smoothing disc keeps at least where they are thinned (0: all).
+    #[serde(default = "default_gradient_sites")]
+    pub gradient_sites: f64,
     /// Kernel of the diffusion estimate.
     pub kernel: DiffusionKernel,
 }
@@ -96,8 +99,13 @@ impl Default for EstimatorSettings {
             kernel: DiffusionKernel::Epanechnikov,
             noise_floor: 2.0,
             min_kernel_photons: 8.0,
+            gradient_sites: default_gradient_sites(),
         }
     }
+}
+
+fn default_gradient_sites() -> f64 {
+    super::diffusion::sites::SITES_PER_SMOOTHING_DISC
 }
 
 /// An estimate with every default resolved, ready to box.
@@ -139,7 +147,7 @@ impl fmt::Display for ResolvedEstimator {
                     f,
                     "diffusion radius={} gradient-radius={} smoothing-radius={} K={} ({:?}) \
                      alpha={} lambda3={} lambda2-floor={} noise-floor={} min-kernel-photons={} \
-                     kernel={:?}",
+                     gradient-sites={} kernel={:?}",
                     p.radius,
                     p.gradient_radius,
                     p.smoothing_radius,
@@ -150,6 +158,7 @@ impl fmt::Display for ResolvedEstimator {
                     p.lambda2_floor,
                     p.noise_floor,
                     p.min_kernel_photons,
+                    p.gradient_sites,
                     p.kernel
                 )
             }
@@ -238,6 +247,7 @@ impl EstimatorSettings {
                 "lambda2-floor" => self.lambda2_floor.to_string(),
                 "noise-floor" => self.noise_floor.to_string(),
                 "min-kernel-photons" => self.min_kernel_photons.to_string(),
+                "gradient-sites" => self.gradient_sites.to_string(),
                 _ => String::new(),
             };
             return Err(EstimateError::InvalidSetting {
@@ -262,6 +272,7 @@ impl EstimatorSettings {
             kernel: self.kernel,
             noise_floor: self.noise_floor,
             min_kernel_photons: self.min_kernel_photons,
+            gradient_sites: self.gradient_sites,
         }
     }
 

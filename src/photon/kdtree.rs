@@ -217,6 +217,66 @@ impl KdTree {
         self.descend(1, &mut offsets, &mut search);
     }
 
+    /// Calls `f(leaf, slots)` for every leaf whose cell is within `radius2` (squared) of
+    /// `query`, `leaf` counted from the first leaf, in slot order (so neighbouring leaves can
+    /// be merged into one run): a scan that streams whole leaves through its own per-slot
+    /// arrays tests the distances itself. Finds nothing where [`KdTree::for_each_within`]
+    /// finds nothing.
+    pub fn for_each_leaf_within(
+        &self,
+        query: Vec3,
+        radius2: f32,
+        f: impl FnMut(usize, std::ops::Range<usize>),
+    ) {
+        if !query.is_finite() || radius2.is_nan() || radius2 < 0.0 || self.is_empty() {
+            return;
+        }
+        let (mut offsets, root_dist2) = self.root_offsets(query);
+        if root_dist2 > radius2 {
+            return;
+        }
+        let mut search = LeavesWithin {
+            query,
+            radius2,
+            visit: f,
+        };
+        self.descend_in_order(1, &mut offsets, &mut search);
+    }
+
+    /// [`KdTree::descend`] with the children in slot order instead of near first.
+    fn descend_in_order<S: Search>(&self, node: usize, offsets: &mut [f32; 3], search: &mut S) {
+        let leaf_base = 1usize << self.depth;
+        if node >= leaf_base {
+            let leaf = (node - leaf_base) as u64;
+            let n = self.len() as u64;
+            let first = ((leaf * n) >> self.depth) as usize;
+            let end = (((leaf + 1) * n) >> self.depth) as usize;
+            search.scan(Leaf {
+                xs: &self.xs[first..end],
+                ys: &self.ys[first..end],
+                zs: &self.zs[first..end],
+                first_slot: first as u32,
+                index: node - leaf_base,
+            });
+            return;
+        }
+        let axis = usize::from(self.axes[node]);
+        let diff = search.query()[axis] - self.splits[node];
+        let query_left = diff < 0.0;
+        for (child, left) in [(2 * node, true), (2 * node + 1, false)] {
+            if left == query_left {
+                self.descend_in_order(child, offsets, search);
+                continue;
+            }
+            let saved = offsets[axis];
+            offsets[axis] = diff;
+            if cell_dist2(offsets) <= search.bound() {
+                self.descend_in_order(child, offsets, search);
+            }
+            offsets[axis] = saved;
+        }
+    }
+
     /// Per-axis offsets from `query` to the root cell and their squared length.
     fn root_offsets(&self, query: Vec3) -> ([f32; 3], f32) {
         let below = (self.lower - query).max(Vec3::ZERO);
@@ -239,6 +299,7 @@ impl KdTree {
                 ys: &self.ys[first..end],
                 zs: &self.zs[first..end],
                 first_slot: first as u32,
+                index: node - leaf_base,
             };
             search.scan(leaf);
             return;
@@ -275,6 +336,8 @@ struct Leaf<'a> {
     ys: &'a [f32],
     zs: &'a [f32],
     first_slot: u32,
+    /// Which leaf, counted from the first.
+    index: usize,
 }
 
 impl Leaf<'_> {
@@ -326,6 +389,28 @@ impl<F: FnMut(u32, f32)> Search for WithinRadius<F> {
     }
 }
 
+struct LeavesWithin<F> {
+    query: Vec3,
+    radius2: f32,
+    visit: F,
+}
+
+impl<F: FnMut(usize, std::ops::Range<usize>)> Search for LeavesWithin<F> {
+    #[inline(always)]
+    fn query(&self) -> Vec3 {
+        self.query
+    }
+    #[inline(always)]
+    fn bound(&self) -> f32 {
+        self.radius2
+    }
+    #[inline(always)]
+    fn scan(&mut self, leaf: Leaf<'_>) {
+        let first = leaf.first_slot as usize;
+        (self.visit)(leaf.index, first..first + leaf.xs.len());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -343,6 +428,7 @@ mod tests {
             ys: &[point.y],
             zs: &[point.z],
             first_slot: 0,
+            index: 0,
         };
         let mut out = [0.0; LEAF_SIZE];
         assert!(cell_dist2(&offsets) <= leaf.dist2(query, &mut out)[0]);

@@ -1,11 +1,12 @@
-//! A photon map: photons in kd-tree order, plus the per-photon gradient when an estimate asks
-//! for one. Owns storage and lookup; knows nothing of kernels, Embree or light transport.
+//! A photon map: photons in kd-tree order, plus the per-photon gradient field when an estimate
+//! asks for one. Owns storage and lookup; knows nothing of kernels, Embree or light transport.
 //!
 //! Memory: a position lives only in the kd-tree (12 bytes, one array per axis), the rest of
 //! the photon beside it as [`PhotonAttributes`] (8 bytes), the tree adds its source index (4)
-//! and split planes (~0.3), and the gradient, when present, is three 16-bit mantissas under a
-//! shared exponent (7, [`PackedGradients`]): about 24.3 bytes per photon, 31.3 with the
-//! gradient ([`PhotonMap::bytes_per_photon`]).
+//! and split planes (~0.3): about 24.3 bytes per photon. The [`GradientField`], while a
+//! diffusion estimate reads the map, adds 12 per photon (the decoded power as f32 arrays in
+//! slot order, which the estimate's leaf scans stream through) and 36 per gradient site (every
+//! photon, except where sites are thinned): at most 72.3 ([`PhotonMap::bytes_per_photon`]).
 
 use super::{KdTree, Photon, PhotonAttributes};
 use glam::Vec3;
@@ -16,8 +17,8 @@ pub struct PhotonMap {
     tree: KdTree,
     /// Power, direction and normal of the photon in each tree slot.
     attributes: Vec<PhotonAttributes>,
-    /// The gradients and the gradient radius they were taken at.
-    gradients: Option<(PackedGradients, f32)>,
+    /// The gradients, with the radii they were taken for.
+    gradients: Option<GradientField>,
     /// Photon paths emitted from the lights to fill this map (for reporting and scaling).
     pub emitted: u64,
 }
@@ -84,24 +85,39 @@ impl PhotonMap {
     pub fn total_power(&self) -> Vec3 {
         self.attributes.iter().map(PhotonAttributes::power).sum()
     }
-    /// Stores the gradients (tree order, one per photon), packed to 7 bytes each, with the
-    /// gradient radius they were taken at: a progressive render shrinks that radius from pass
-    /// to pass, and an estimate must never read gradients of another radius.
+    /// Stores gradients taken at every photon (tree order, one per photon) with the gradient
+    /// radius they were taken at: every photon is a site of weight 1.
     pub fn set_gradients(&mut self, gradients: &[Vec3], radius: f32) {
-        assert_eq!(gradients.len(), self.len());
-        self.gradients = Some((PackedGradients::pack(gradients), radius));
+        let field = GradientField::new(self, gradients, vec![1.0; self.len()], radius, None);
+        self.gradients = Some(field);
     }
-    pub fn gradients(&self) -> Option<&PackedGradients> {
-        self.gradients.as_ref().map(|(g, _)| g)
+    /// Stores a gradient field (see [`GradientField::new`]).
+    pub fn set_gradient_field(&mut self, field: GradientField) {
+        assert_eq!(field.len(), self.len());
+        self.gradients = Some(field);
+    }
+    pub fn gradients(&self) -> Option<&GradientField> {
+        self.gradients.as_ref()
     }
     /// The gradient radius of the stored gradients.
     pub fn gradient_radius(&self) -> Option<f32> {
-        self.gradients.as_ref().map(|(_, r)| *r)
+        self.gradients.as_ref().map(|g| g.radius)
     }
-    /// The gradients, if they were taken at exactly `radius`.
-    pub fn gradients_at(&self, radius: f32) -> Option<&PackedGradients> {
+    /// The gradients, if they were taken at exactly `radius` and their sites suit `thinning`
+    /// = (smoothing radius, sites per disc): thinned for exactly that, or not thinned at all
+    /// (which suits every thinning; `None` asks for that). A progressive render shrinks the
+    /// radii from pass to pass, and an estimate must never read a field made for others.
+    pub fn gradients_at(
+        &self,
+        radius: f32,
+        thinning: Option<(f32, f64)>,
+    ) -> Option<&GradientField> {
         match &self.gradients {
-            Some((g, r)) if *r == radius => Some(g),
+            Some(g)
+                if g.radius == radius && (g.thinned_for.is_none() || g.thinned_for == thinning) =>
+            {
+                Some(g)
+            }
             _ => None,
         }
     }
@@ -112,82 +128,248 @@ impl PhotonMap {
         }
         let bytes = self.tree.heap_bytes()
             + self.attributes.capacity() * size_of::<PhotonAttributes>()
-            + self.gradients.as_ref().map_or(0, |(g, _)| g.heap_bytes());
+            + self.gradients.as_ref().map_or(0, GradientField::heap_bytes);
         bytes as f64 / self.len() as f64
     }
 }
 
-/// Gradients in 7 bytes each: three signed 16-bit mantissas under one exponent per photon
-/// (like RGBE, with signs). Every component is kept within 2⁻¹⁵ of the photon's largest one
-/// (about 3·10⁻⁵), and each photon has its own exponent, so maps whose powers span any range
-/// keep all of their gradients; only magnitudes below 2⁻¹²⁸ (under f32's normal range) read
-/// back as zero.
+/// The gradient pass's result in the form the diffusion estimate scans. Per slot, the
+/// photon's power, decoded, one f32 array per channel, so a leaf's run of slots is a straight
+/// loop. The sites (photons with a gradient; see `estimate::diffusion::sites`) apart, in slot
+/// order, each leaf's a contiguous run: position, gradient and weight (the photons a site
+/// stands for), so the structure tensor's scan touches sites only. Per leaf, the normal all
+/// of its photons share, if they share one.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct PackedGradients {
-    packed: Vec<[u8; 7]>,
+pub struct GradientField {
+    radius: f32,
+    /// The (smoothing radius, sites per disc) the sites were thinned for; `None`: every
+    /// photon is a site.
+    thinned_for: Option<(f32, f64)>,
+    power: [Vec<f32>; 3],
+    /// Sites: position, gradient, weight, each one array per component.
+    site_position: [Vec<f32>; 3],
+    site_gradient: [Vec<f32>; 3],
+    site_weight: Vec<f32>,
+    /// The site's photon's channel sum (three times its scalar power) over `power_scale`.
+    site_power: Vec<f32>,
+    power_scale: f64,
+    /// The site gradients are stored over this.
+    gradient_scale: f64,
+    site_slot: Vec<u32>,
+    /// The sites of leaf `j` are `leaf_sites[j]..leaf_sites[j + 1]`.
+    leaf_sites: Vec<u32>,
+    leaf_normals: Vec<Option<Vec3>>,
+    photons: usize,
 }
 
-/// Stored exponent `e + EXPONENT_BIAS` with the largest component below `2^e`; 0 is a zero
-/// gradient.
-const EXPONENT_BIAS: i32 = 127;
+/// A leaf's sites for a scan: position, gradient and weight columns.
+pub struct SiteColumns<'a> {
+    pub position: [&'a [f32]; 3],
+    pub gradient: [&'a [f32]; 3],
+    pub weight: &'a [f32],
+    /// The site's photon's channel sum over [`GradientField::power_scale`].
+    pub power: &'a [f32],
+}
 
-impl PackedGradients {
-    pub fn pack(gradients: &[Vec3]) -> Self {
-        Self {
-            packed: gradients.iter().map(|&g| pack_one(g)).collect(),
-        }
+/// The power of two at or above `largest` (1 for zero or non-finite), so that values over it
+/// are at most 1 and their squares and products stay in f32's range.
+fn scale_for(largest: f32) -> f64 {
+    if largest > 0.0 && largest.is_finite() {
+        2f64.powi((largest as f64).log2().ceil() as i32)
+    } else {
+        1.0
     }
-    #[inline]
-    pub fn get(&self, slot: u32) -> Vec3 {
-        unpack_one(self.packed[slot as usize])
+}
+
+impl GradientField {
+    /// The field of `map` with `gradients` and site `weights` (slot order; a site is a photon
+    /// of positive weight, and its gradient is kept), taken at gradient radius `radius` on
+    /// sites thinned for `thinned_for` = (smoothing radius, sites per disc) (`None`: all
+    /// photons, weight 1).
+    pub fn new(
+        map: &PhotonMap,
+        gradients: &[Vec3],
+        weights: Vec<f32>,
+        radius: f32,
+        thinned_for: Option<(f32, f64)>,
+    ) -> Self {
+        assert_eq!(gradients.len(), map.len());
+        assert_eq!(weights.len(), map.len());
+        let tree = map.tree();
+        let channel = |c: usize| -> Vec<f32> {
+            (0..map.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|s| map.attributes(s as u32).power()[c])
+                .collect()
+        };
+        let mut field = Self {
+            radius,
+            thinned_for,
+            power: [channel(0), channel(1), channel(2)],
+            photons: map.len(),
+            ..Self::default()
+        };
+        // Scales (powers of two, so exact) that keep the f32 scans' squares of powers and
+        // gradients inside f32's range whatever the light's power or the scene's size.
+        let sites = weights.iter().filter(|&&w| w > 0.0).count();
+        let phi3 = |s: usize| {
+            let p = map.attributes(s as u32).power();
+            p.x + p.y + p.z
+        };
+        let largest = |f: &dyn Fn(usize) -> f32| {
+            (0..map.len())
+                .filter(|&s| weights[s] > 0.0)
+                .map(f)
+                .filter(|v| v.is_finite())
+                .fold(0.0f32, f32::max)
+        };
+        field.power_scale = scale_for(largest(&phi3));
+        field.gradient_scale = scale_for(largest(&|s| gradients[s].abs().max_element()));
+        let (ps, gs) = (
+            (1.0 / field.power_scale) as f32,
+            (1.0 / field.gradient_scale) as f32,
+        );
+        for c in 0..3 {
+            field.site_position[c].reserve_exact(sites);
+            field.site_gradient[c].reserve_exact(sites);
+        }
+        field.site_weight.reserve_exact(sites);
+        field.site_power.reserve_exact(sites);
+        field.site_slot.reserve_exact(sites);
+        field
+            .leaf_sites
+            .reserve_exact(tree.node_end() - tree.leaf_base() + 1);
+        field.leaf_sites.push(0);
+        for leaf in tree.leaf_base()..tree.node_end() {
+            for s in tree.node_slots(leaf) {
+                if weights[s] > 0.0 {
+                    let (p, g) = (tree.point(s), gradients[s] * gs);
+                    for c in 0..3 {
+                        field.site_position[c].push(p[c]);
+                        field.site_gradient[c].push(g[c]);
+                    }
+                    field.site_weight.push(weights[s]);
+                    field.site_power.push(phi3(s) * ps);
+                    field.site_slot.push(s as u32);
+                }
+            }
+            field.leaf_sites.push(field.site_slot.len() as u32);
+        }
+        field.leaf_normals = (tree.leaf_base()..tree.node_end())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|leaf| {
+                let mut codes = tree
+                    .node_slots(leaf)
+                    .map(|s| map.attributes(s as u32).normal_code());
+                let first = codes.next()?;
+                codes
+                    .all(|c| c == first)
+                    .then(|| super::record::decode_octahedral(first.to_be_bytes()))
+            })
+            .collect();
+        field
     }
     pub fn len(&self) -> usize {
-        self.packed.len()
+        self.photons
     }
     pub fn is_empty(&self) -> bool {
-        self.packed.is_empty()
+        self.photons == 0
     }
-    pub fn iter(&self) -> impl ExactSizeIterator<Item = Vec3> + '_ {
-        self.packed.iter().map(|&p| unpack_one(p))
+    /// The gradient radius.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+    /// What the site columns' powers are to be multiplied by.
+    pub fn power_scale(&self) -> f64 {
+        self.power_scale
+    }
+    /// What the site columns' gradients are to be multiplied by.
+    pub fn gradient_scale(&self) -> f64 {
+        self.gradient_scale
+    }
+    /// Photons with a gradient.
+    pub fn sites(&self) -> usize {
+        self.site_slot.len()
+    }
+    /// The gradient of every photon in slot order, zero where there is no site.
+    pub fn gradients(&self) -> Vec<Vec3> {
+        let mut all = vec![Vec3::ZERO; self.photons];
+        for (i, &s) in self.site_slot.iter().enumerate() {
+            all[s as usize] = self.site(i).1.as_vec3();
+        }
+        all
+    }
+    /// The site weight of every photon in slot order (0 where there is no site).
+    pub fn weights(&self) -> Vec<f32> {
+        let mut all = vec![0.0; self.photons];
+        for (i, &s) in self.site_slot.iter().enumerate() {
+            all[s as usize] = self.site_weight[i];
+        }
+        all
+    }
+    /// Site `i`: (position, gradient, weight), the gradient at its true scale.
+    #[inline]
+    pub fn site(&self, i: usize) -> (Vec3, glam::DVec3, f32) {
+        let [px, py, pz] = &self.site_position;
+        let [gx, gy, gz] = &self.site_gradient;
+        (
+            Vec3::new(px[i], py[i], pz[i]),
+            glam::DVec3::new(gx[i] as f64, gy[i] as f64, gz[i] as f64) * self.gradient_scale,
+            self.site_weight[i],
+        )
+    }
+    /// The slot of site `i`.
+    #[inline]
+    pub fn site_slot(&self, i: usize) -> u32 {
+        self.site_slot[i]
+    }
+    /// The sites of leaf `leaf` (counted from the first leaf), as indices for [`Self::site`].
+    #[inline]
+    pub fn leaf_site_range(&self, leaf: usize) -> std::ops::Range<usize> {
+        self.leaf_sites[leaf] as usize..self.leaf_sites[leaf + 1] as usize
+    }
+    /// All sites' columns (index them with [`Self::leaf_site_range`]).
+    #[inline]
+    pub fn site_columns(&self) -> SiteColumns<'_> {
+        let [px, py, pz] = &self.site_position;
+        let [gx, gy, gz] = &self.site_gradient;
+        SiteColumns {
+            position: [px, py, pz],
+            gradient: [gx, gy, gz],
+            weight: &self.site_weight,
+            power: &self.site_power,
+        }
+    }
+    /// The power columns (r, g, b) in slot order.
+    #[inline]
+    pub fn power_columns(&self) -> [&[f32]; 3] {
+        [&self.power[0], &self.power[1], &self.power[2]]
+    }
+    /// The decoded power of the photon in `slot`.
+    #[inline]
+    pub fn power(&self, slot: u32) -> Vec3 {
+        let s = slot as usize;
+        Vec3::new(self.power[0][s], self.power[1][s], self.power[2][s])
+    }
+    /// The normal every photon of leaf `leaf` (counted from the first leaf) shares, if any.
+    #[inline]
+    pub fn leaf_normal(&self, leaf: usize) -> Option<Vec3> {
+        self.leaf_normals[leaf]
     }
     fn heap_bytes(&self) -> usize {
-        self.packed.capacity() * size_of::<[u8; 7]>()
+        let floats: usize = self
+            .power
+            .iter()
+            .chain(&self.site_position)
+            .chain(&self.site_gradient)
+            .map(Vec::capacity)
+            .sum();
+        (floats + self.site_weight.capacity() + self.site_power.capacity()) * size_of::<f32>()
+            + (self.site_slot.capacity() + self.leaf_sites.capacity()) * size_of::<u32>()
+            + self.leaf_normals.capacity() * size_of::<Option<Vec3>>()
     }
-}
-
-fn pack_one(g: Vec3) -> [u8; 7] {
-    let largest = g.abs().max_element();
-    if !g.is_finite() || largest == 0.0 {
-        return [0; 7];
-    }
-    let e = (largest.log2().floor() as i32 + 1).min(128);
-    if e + EXPONENT_BIAS < 1 {
-        return [0; 7];
-    }
-    let scale = (2.0f64).powi(15 - e);
-    let q = |v: f32| ((v as f64 * scale).round().clamp(-32767.0, 32767.0) as i16).to_le_bytes();
-    let (x, y, z) = (q(g.x), q(g.y), q(g.z));
-    [
-        x[0],
-        x[1],
-        y[0],
-        y[1],
-        z[0],
-        z[1],
-        (e + EXPONENT_BIAS) as u8,
-    ]
-}
-
-#[inline]
-fn unpack_one(p: [u8; 7]) -> Vec3 {
-    if p[6] == 0 {
-        return Vec3::ZERO;
-    }
-    // 2^(e − 15) built from its bits: exact and cheaper than powi.
-    let e = p[6] as i64 - EXPONENT_BIAS as i64 - 15;
-    let step = f64::from_bits(((e + 1023) as u64) << 52);
-    let m = |i: usize| i16::from_le_bytes([p[i], p[i + 1]]) as f64 * step;
-    Vec3::new(m(0) as f32, m(2) as f32, m(4) as f32)
 }
 
 #[cfg(test)]
@@ -195,39 +377,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn packed_gradients_keep_fifteen_bits_of_each_photons_largest_component() {
-        let mut g = vec![Vec3::new(3.0e12, -1.0, 0.0), Vec3::new(-1e-37, 4e-38, 0.0)];
-        for e in -30..=30 {
-            let m = 10f32.powi(e);
-            g.push(Vec3::new(m, -0.37 * m, 0.001 * m));
-            g.push(Vec3::new(-0.999 * m, 0.5 * m, m));
-        }
-        let packed = PackedGradients::pack(&g);
-        for (slot, want) in g.iter().enumerate() {
-            let got = packed.get(slot as u32);
-            let tolerance = want.abs().max_element() * 2f32.powi(-15);
-            assert!(
-                (got - *want).abs().max_element() <= tolerance,
-                "{want} -> {got}"
-            );
-        }
-        let extreme = [
-            Vec3::splat(f32::MAX),
-            Vec3::new(f32::NAN, 1.0, 1.0),
-            Vec3::ZERO,
-        ];
-        let extreme = PackedGradients::pack(&extreme);
-        assert!(extreme.get(0).is_finite() && extreme.get(0).x > 3.4e38);
-        assert_eq!(extreme.get(1), Vec3::ZERO);
-        assert_eq!(extreme.get(2), Vec3::ZERO);
-        assert_eq!(
-            PackedGradients::pack(&[Vec3::splat(1e-39)]).get(0),
-            Vec3::ZERO
-        );
-    }
-
-    #[test]
-    fn a_map_holds_at_most_32_bytes_per_photon_with_its_gradient() {
+    fn a_map_holds_at_most_74_bytes_per_photon_with_its_gradient_field() {
         let photons: Vec<Photon> = (0..10_000)
             .map(|i| {
                 let t = i as f32 * 0.618;
@@ -244,7 +394,7 @@ mod tests {
         map.set_gradients(&vec![Vec3::X; map.len()], 1.0);
         let with = map.bytes_per_photon();
         assert!(
-            bare < 25.0 && with <= 32.0 && with - bare == 7.0,
+            bare < 25.0 && with <= 74.0 && with - bare >= 48.0,
             "{bare} {with}"
         );
         let mut got: Vec<Photon> = map.photons().collect();

@@ -21,7 +21,6 @@ use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
 use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
 use super::schedule::{Schedule, fixed_radius, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
-use crate::estimate::diffusion::gradient_pass;
 use crate::estimate::kernel::RadialKernel;
 use crate::estimate::settings::k_equivalent_radius;
 use crate::estimate::{
@@ -226,7 +225,7 @@ impl PassContext<'_> {
                 estimator = Some(resolved.to_string());
                 if let ResolvedEstimator::Diffusion(d) = &resolved {
                     let start = Instant::now();
-                    gradient_pass(map, d.gradient_radius());
+                    d.gradient_pass(map);
                     diffusion = Some(*d);
                     times.accumulate(
                         "gradient pass",

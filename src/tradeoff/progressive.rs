@@ -9,7 +9,6 @@
 
 use super::sweep::{Row, SweepError, Target, UNIT_RADIUS_K};
 use crate::estimate::ResolvedEstimator;
-use crate::estimate::diffusion::gradient_pass;
 use crate::estimate::settings::{EstimatorKind, EstimatorSettings, k_equivalent_radius};
 use crate::render::schedule::{Schedule, pass_estimator};
 use indicatif::ProgressBar;
@@ -67,7 +66,7 @@ pub fn run_progressive(
             let start = Instant::now();
             let resolved = settings.resolve(&map)?;
             if let ResolvedEstimator::Diffusion(d) = &resolved {
-                gradient_pass(&mut map, d.gradient_radius());
+                d.gradient_pass(&mut map);
             }
             s.prepare += start.elapsed().as_secs_f64();
             let estimate = resolved.into_boxed();

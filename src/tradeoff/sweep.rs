@@ -4,7 +4,6 @@
 //! the run order, the timing split and the CSV columns; it must not know how a target makes
 //! photons, evaluates an image or scores it (that is [`Target`]'s job), and must not plot.
 
-use crate::estimate::diffusion::gradient_pass;
 use crate::estimate::settings::{EstimatorKind, EstimatorSettings, k_equivalent_radius};
 use crate::estimate::{EstimateError, RadianceEstimate, ResolvedEstimator};
 use crate::photon::PhotonMap;
@@ -296,17 +295,18 @@ pub fn run_sweep(
                 radius: Some(radius),
                 ..settings(EstimatorKind::Diffusion)
             };
-            let gradient_radius = match base.resolve(&map)? {
-                ResolvedEstimator::Diffusion(d) => d.gradient_radius(),
+            let diffusion = match base.resolve(&map)? {
+                ResolvedEstimator::Diffusion(d) => d,
                 _ => unreachable!("diffusion settings resolve to the diffusion estimate"),
             };
             // One gradient pass serves every K at this radius; each run is charged for it,
             // since a user making that one image would pay it once.
             bar.set_message(format!(
-                "{count} photons: gradient pass r={gradient_radius:.4}"
+                "{count} photons: gradient pass r={:.4}",
+                diffusion.gradient_radius()
             ));
             let start = Instant::now();
-            gradient_pass(&mut map, gradient_radius);
+            diffusion.gradient_pass(&mut map);
             let prepare_seconds = start.elapsed().as_secs_f64();
             for &diffusivity in &plan.diffusivities {
                 bar.set_message(format!(
@@ -320,7 +320,7 @@ pub fn run_sweep(
                 let (seconds, errors) = measure(&map, resolved);
                 rows.push(Row {
                     radius: Some(radius),
-                    gradient_radius: Some(gradient_radius),
+                    gradient_radius: Some(diffusion.gradient_radius()),
                     diffusivity: Some(diffusivity),
                     ..row("diffusion", prepare_seconds, seconds, errors)
                 });

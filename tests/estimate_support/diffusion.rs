@@ -24,6 +24,7 @@ pub fn params(r: f32) -> DiffusionParams {
         kernel: DiffusionKernel::Epanechnikov,
         noise_floor: 2.0,
         min_kernel_photons: 0.0,
+        gradient_sites: 256.0,
     }
 }
 

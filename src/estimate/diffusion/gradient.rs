@@ -20,6 +20,7 @@
 
 use super::super::{NORMAL_AGREEMENT_MIN_COS, power_f64};
 use crate::photon::kdtree::LEAF_SIZE;
+use crate::photon::map::GradientField;
 use crate::photon::{KdTree, PhotonAttributes, PhotonMap};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -50,10 +51,22 @@ fn channel_sum(attributes: &PhotonAttributes) -> f64 {
 /// # Panics
 /// If `radius` is not positive and finite.
 pub fn compute_gradients(map: &PhotonMap, radius: f32) -> Vec<Vec3> {
+    compute_site_gradients(map, radius, None)
+}
+
+/// The gradient at the photons whose `weights` entry is positive (all of them for `None`), in
+/// tree order, zero elsewhere; computed in parallel, the same whatever the thread count.
+///
+/// # Panics
+/// If `radius` is not positive and finite, or `weights` is not one per photon.
+pub fn compute_site_gradients(map: &PhotonMap, radius: f32, weights: Option<&[f32]>) -> Vec<Vec3> {
     assert!(
         radius > 0.0 && radius.is_finite(),
         "gradient radius must be positive, got {radius}"
     );
+    if let Some(w) = weights {
+        assert_eq!(w.len(), map.len(), "one site weight per photon");
+    }
     let sums = NodeSums::build(map);
     // The sums are of channel sums, three times the scalar power.
     let scale = 4.0 / (3.0 * PI * (radius as f64).powi(4));
@@ -64,26 +77,48 @@ pub fn compute_gradients(map: &PhotonMap, radius: f32) -> Vec<Vec3> {
     let mut runs = Vec::with_capacity(tree.node_end() - tree.leaf_base());
     let mut rest = gradients.as_mut_slice();
     for leaf in tree.leaf_base()..tree.node_end() {
-        let (run, after) = std::mem::take(&mut rest).split_at_mut(tree.node_slots(leaf).len());
-        runs.push((leaf, run));
+        let slots = tree.node_slots(leaf);
+        let (run, after) = std::mem::take(&mut rest).split_at_mut(slots.len());
         rest = after;
+        let sites = match weights {
+            None => full_mask(slots.len()),
+            Some(w) => slots
+                .clone()
+                .enumerate()
+                .filter(|&(_, s)| w[s] > 0.0)
+                .fold(0u32, |m, (i, _)| m | (1 << i)),
+        };
+        if sites != 0 {
+            runs.push((leaf, sites, run));
+        }
     }
-    runs.into_par_iter()
-        .with_min_len(16)
-        .for_each_init(Vec::new, |sums_of_leaf, (leaf, run)| {
-            sums.leaf_sums(map, leaf, radius, sums_of_leaf);
-            for (g, &sum) in run.iter_mut().zip(sums_of_leaf.iter()) {
-                *g = to_f32_direction_kept(sum * scale);
+    runs.into_par_iter().with_min_len(16).for_each_init(
+        Vec::new,
+        |sums_of_leaf, (leaf, sites, run)| {
+            sums.leaf_sums(map, leaf, sites, radius, sums_of_leaf);
+            let mut bits = sites;
+            for &sum in sums_of_leaf.iter() {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                run[i] = to_f32_direction_kept(sum * scale);
             }
-        });
+        },
+    );
     gradients
 }
 
-/// Computes the gradients and stores them in the map (`map.set_gradients`). This is what the
-/// diffusion estimate's `prepare` runs; call it yourself to time it as a phase of its own.
-pub fn gradient_pass(map: &mut PhotonMap, radius: f32) {
-    let gradients = compute_gradients(map, radius);
-    map.set_gradients(&gradients, radius);
+/// The gradient pass: gradients at radius `radius`, on the sites thinned for `thinning` =
+/// (smoothing radius, sites per smoothing disc) ([`super::sites`]; `None`: every photon),
+/// stored in the map as its [`GradientField`]. The diffusion estimate's `prepare` runs it
+/// (`DiffusionEstimate::gradient_pass`); call that yourself to time it as a phase of its own.
+pub fn gradient_pass(map: &mut PhotonMap, radius: f32, thinning: Option<(f32, f64)>) {
+    let weights = match thinning {
+        Some((rho, sites)) => super::sites::site_weights(map, rho, sites),
+        None => vec![1.0; map.len()],
+    };
+    let gradients = compute_site_gradients(map, radius, thinning.map(|_| weights.as_slice()));
+    let field = GradientField::new(map, &gradients, weights, radius, thinning);
+    map.set_gradient_field(field);
 }
 
 /// The photon-by-photon sum `Σ (x_i − x) Φ_i` (unscaled), for tests of the node sums.
@@ -273,26 +308,36 @@ impl<'a> NodeSums<'a> {
         }
     }
 
-    /// `Σ (x_i − x) Φ_i` for every photon of the leaf `leaf`, into `out` (one per slot, in
-    /// slot order). Dual-tree: a node wholly within `radius` of every photon of the leaf, with
-    /// normals agreeing with all of theirs, is added once for all of them; nodes straddling
-    /// the rim of some of them are opened down to leaves, which each photon tests on its own.
-    fn leaf_sums(&self, map: &PhotonMap, leaf: usize, radius: f32, out: &mut Vec<DVec3>) {
+    /// `Σ (x_i − x) Φ_i` for the photons of the leaf `leaf` whose bits are set in `sites`, into
+    /// `out` (one per such photon, in slot order). Dual-tree: a node wholly within `radius`
+    /// of every one of them, with normals agreeing with all of theirs, is added once for all
+    /// of them; nodes straddling the rim of some of them are opened down to leaves, which each
+    /// photon tests on its own.
+    fn leaf_sums(
+        &self,
+        map: &PhotonMap,
+        leaf: usize,
+        sites: u32,
+        radius: f32,
+        out: &mut Vec<DVec3>,
+    ) {
         out.clear();
         let slots = self.tree.node_slots(leaf);
-        out.resize(slots.len(), DVec3::ZERO);
         let group = &self.nodes[leaf];
-        if slots.is_empty() {
+        if slots.is_empty() || sites == 0 {
             return;
         }
         let queries: Vec<Query> = slots
             .clone()
-            .map(|s| Query {
+            .enumerate()
+            .filter(|&(i, _)| sites & (1 << i) != 0)
+            .map(|(_, s)| Query {
                 x: map.position(s as u32),
                 normal: map.attributes(s as u32).normal(),
                 radius2: radius * radius,
             })
             .collect();
+        out.resize(queries.len(), DVec3::ZERO);
         let mut shared = Shared {
             centre: group.centre(),
             power: 0.0,

@@ -22,6 +22,7 @@
 //! losing the blur (see `tests/estimate_diffusion.rs`).
 
 pub mod gradient;
+pub mod sites;
 pub mod structure;
 pub mod tensor;
 
@@ -29,8 +30,9 @@ pub use gradient::{compute_gradients, gradient_pass};
 
 use super::classic::{PhotonReader, power_of};
 use super::kernel::RadialKernel;
-use super::{Query, RadianceEstimate, Scratch, to_irradiance};
+use super::{NORMAL_AGREEMENT_MIN_COS, Query, RadianceEstimate, Scratch, to_irradiance};
 use crate::photon::PhotonMap;
+use crate::photon::map::GradientField;
 use glam::{DVec3, Vec3};
 use structure::{StructureTensor, TangentFrame};
 use tensor::{DiffusionTensor, diffusivity};
@@ -95,6 +97,9 @@ pub struct DiffusionParams {
     /// disc holds too few photons, as a progressive render's shrinking radii eventually make
     /// every disc. 0 turns it off.
     pub min_kernel_photons: f64,
+    /// Gradient sites a smoothing disc keeps at least where the gradient pass thins them
+    /// ([`sites`]); 0 gives every photon a gradient.
+    pub gradient_sites: f64,
 }
 
 impl DiffusionParams {
@@ -130,6 +135,12 @@ impl DiffusionParams {
         }
         if !(self.min_kernel_photons >= 0.0 && self.min_kernel_photons.is_finite()) {
             return Err(("min-kernel-photons", "must be zero or positive and finite"));
+        }
+        if !(self.gradient_sites == 0.0 || (1.0..=1e9).contains(&self.gradient_sites)) {
+            return Err((
+                "gradient-sites",
+                "must be 0 (every photon) or from 1 to 1e9",
+            ));
         }
         Ok(())
     }
@@ -187,7 +198,9 @@ impl DiffusionEstimate {
         self.analyse(map, query, scratch).1
     }
 
-    /// Gathers into `scratch.neighbours` and builds the diffusion tensor.
+    /// Scans the leaves within `max(r, ρ)` and builds the diffusion tensor; leaves the
+    /// kernel's inputs in `scratch` (runs of one-surface leaves, and the agreeing photons of
+    /// leaves that hold several surfaces one by one).
     fn analyse(
         &self,
         map: &PhotonMap,
@@ -195,56 +208,74 @@ impl DiffusionEstimate {
         scratch: &mut Scratch,
     ) -> (DiffusionTensor, KernelShape) {
         let p = &self.params;
-        let gradients = map.gradients_at(p.gradient_radius).expect(
-            "diffusion estimate queried without gradients at its gradient radius (call prepare)",
-        );
+        let field = self
+            .field(map)
+            .expect("diffusion estimate queried without gradients at its radii (call prepare)");
         let (r2, rho2) = (sq(p.radius), sq(p.smoothing_radius));
         let frame = TangentFrame::new(query.normal);
         let normal = frame.normal.as_vec3();
-        map.tree()
-            .within_radius(query.position, r2.max(rho2) as f32, &mut scratch.neighbours);
-
-        let mut structure = StructureTensor::new(frame);
-        let mut isotropic = 0.0;
-        let mut second_moment = 0.0;
-        let mut reader = PhotonReader::new(normal);
-        let epanechnikov = RadialKernel::Epanechnikov.prepare().for_radius2(r2);
-        let inv_rho2 = 1.0 / rho2;
-        let inputs = &mut scratch.kernel_inputs;
+        let mut sums = AnalysisSums::default();
+        let radii = ScanRadii {
+            r2: r2 as f32,
+            rho2: rho2 as f32,
+            inv_r2: (1.0 / r2) as f32,
+            inv_rho2: (1.0 / rho2) as f32,
+        };
+        let tree = map.tree();
+        let (runs, inputs) = (&mut scratch.kernel_runs, &mut scratch.kernel_inputs);
+        runs.clear();
         inputs.clear();
-        for n in scratch.neighbours.as_slice() {
-            let photon = map.attributes(n.slot);
-            if !reader.agrees(photon) {
-                continue;
-            }
-            let d2 = n.dist2 as f64;
-            if d2 < rho2 {
-                structure.add(gradients.get(n.slot), 1.0 - d2 * inv_rho2);
-            }
-            let power = power_of(photon);
-            if d2 < r2 {
-                inputs.push((map.position(n.slot) - query.position, power));
-            }
-            let w = epanechnikov.weight(d2);
-            // Three times the channel mean (`gradient::scalar_power`); the thirds are taken
-            // once after the loop rather than divided per photon.
-            let phi3 = power.x + power.y + power.z;
-            isotropic += w * phi3;
-            second_moment += w * phi3 * phi3;
+        // Neighbouring one-surface leaves come in slot order and merge into runs, so each
+        // run is one loop, not one per leaf of twenty photons.
+        let mut mixed = Vec::new();
+        tree.for_each_leaf_within(
+            query.position,
+            r2.max(rho2) as f32,
+            |leaf, slots| match field.leaf_normal(leaf) {
+                Some(n) if n.dot(normal) < NORMAL_AGREEMENT_MIN_COS => {}
+                Some(_) => match runs.last_mut() {
+                    Some(run) if run.slots.end == slots.start => {
+                        run.slots.end = slots.end;
+                        run.leaves.end = leaf + 1;
+                    }
+                    _ => runs.push(LeafRun {
+                        leaves: leaf..leaf + 1,
+                        slots,
+                    }),
+                },
+                None => mixed.push((leaf, slots)),
+            },
+        );
+        for run in runs.iter() {
+            sums.scan_run(field, query.position, run, &radii);
         }
-        let isotropic = isotropic / (3.0 * r2);
-        let noise = gradient_noise(second_moment / (9.0 * r2), p.gradient_radius as f64);
+        for leaf in mixed {
+            sums.scan_mixed(map, field, query, leaf, &radii, inputs);
+        }
+        // Back from the field's scaled units.
+        let (gs, ps) = (field.gradient_scale(), field.power_scale());
+        let mut structure = StructureTensor::new(frame);
+        structure.add_world_sum(sums.structure.map(|v| v * gs * gs), sums.structure_weight);
+        let (iso_sum, second_sum) = (sums.isotropic * ps, sums.second_moment * ps * ps);
+        // Three times the channel mean (`gradient::scalar_power`) was summed; the thirds and
+        // the Epanechnikov constant 2/π are taken here once.
+        let epanechnikov = 2.0 / std::f64::consts::PI;
+        let isotropic = epanechnikov * iso_sum / (3.0 * r2);
+        let noise = gradient_noise(
+            epanechnikov * second_sum / (9.0 * r2),
+            p.gradient_radius as f64,
+        );
         let eigen = structure.average().eigen();
         let signal = (eigen.major - p.noise_floor * noise).max(0.0);
         let contrast = match p.units {
             DiffusivityUnits::Absolute => signal,
             DiffusivityUnits::Dimensionless => relative_contrast(signal, r2, isotropic),
         };
-        let inside = inputs.len();
-        let floor = if inside == 0 {
+        let inside = sums.inside;
+        let floor = if inside <= 0.0 {
             1.0
         } else {
-            let f = p.min_kernel_photons / inside as f64;
+            let f = p.min_kernel_photons / inside;
             (f * f).clamp(p.lambda2_floor, 1.0)
         };
         let lambda2 = diffusivity(contrast, p.diffusivity, p.alpha).max(floor);
@@ -262,6 +293,220 @@ impl DiffusionEstimate {
         };
         (tensor, shape)
     }
+
+    /// The gradient pass this estimate reads: gradients at its gradient radius, on sites
+    /// thinned for its smoothing radius (see [`sites`]). [`RadianceEstimate::prepare`] runs
+    /// it when the map holds no such field; call it yourself to time it as its own phase.
+    pub fn gradient_pass(&self, map: &mut PhotonMap) {
+        let p = &self.params;
+        gradient_pass(map, p.gradient_radius, self.thinning());
+    }
+
+    /// How the gradient pass thins sites: (smoothing radius, sites per disc), or `None`.
+    fn thinning(&self) -> Option<(f32, f64)> {
+        let p = &self.params;
+        (p.gradient_sites > 0.0).then_some((p.smoothing_radius, p.gradient_sites))
+    }
+
+    /// The map's gradient field if it was made for this estimate's radii and thinning.
+    fn field<'m>(&self, map: &'m PhotonMap) -> Option<&'m GradientField> {
+        map.gradients_at(self.params.gradient_radius, self.thinning())
+    }
+}
+
+/// The squared radii of one query's scans, and their inverses, in f32 for the leaf loops.
+struct ScanRadii {
+    r2: f32,
+    rho2: f32,
+    inv_r2: f32,
+    inv_rho2: f32,
+}
+
+/// What the analysis sums over the photons on the query's surface: the structure tensor's
+/// weighted world-space outer products (xx, xy, xz, yy, yz, zz) and their weight, and within
+/// `r` the Epanechnikov sums of the channel sum and its square (without the kernel's
+/// constant) and the count.
+#[derive(Default)]
+struct AnalysisSums {
+    structure: [f64; 6],
+    structure_weight: f64,
+    isotropic: f64,
+    second_moment: f64,
+    /// Photons within `r` (the sites' weights summed).
+    inside: f64,
+}
+
+impl AnalysisSums {
+    /// Adds a run of leaves whose photons all agree with the query's normal, by its sites
+    /// (every photon, but where sites are thinned: then each site stands for its weight's
+    /// worth of photons in every sum), four lanes at a time over the field's arrays (f32
+    /// within a run, f64 across runs).
+    #[inline]
+    fn scan_run(&mut self, field: &GradientField, q: Vec3, run: &LeafRun, radii: &ScanRadii) {
+        let sites = field.leaf_site_range(run.leaves.start).start
+            ..field.leaf_site_range(run.leaves.end - 1).end;
+        let columns = field.site_columns();
+        let [xs, ys, zs] = columns.position;
+        let Some(end) = lane_end(&sites, xs.len()) else {
+            for i in sites {
+                self.add_site(field, i, q, radii);
+            }
+            return;
+        };
+        let n = sites.len();
+        let s = sites.start..end;
+        let [gx, gy, gz] = columns.gradient;
+        let (xs, ys, zs) = (
+            four(&xs[s.clone()]),
+            four(&ys[s.clone()]),
+            four(&zs[s.clone()]),
+        );
+        let (gx, gy, gz) = (
+            four(&gx[s.clone()]),
+            four(&gy[s.clone()]),
+            four(&gz[s.clone()]),
+        );
+        let (gw, gp) = (four(&columns.weight[s.clone()]), four(&columns.power[s]));
+        let mut t = [[0.0f32; LANES]; 6];
+        let mut tw = [0.0f32; LANES];
+        let (mut iso, mut second, mut inside) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+        for c in 0..xs.len() {
+            let (x4, y4, z4) = (xs[c], ys[c], zs[c]);
+            let (gx4, gy4, gz4, gw4, gp4) = (gx[c], gy[c], gz[c], gw[c], gp[c]);
+            for lane in 0..LANES {
+                let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
+                let d2 = dx * dx + dy * dy + dz * dz;
+                let valid = c * LANES + lane < n;
+                let m = gw4[lane];
+                let w = masked((1.0 - d2 * radii.inv_rho2) * m, valid & (d2 < radii.rho2));
+                let (x, y, z) = (gx4[lane], gy4[lane], gz4[lane]);
+                let (wx, wy) = (w * x, w * y);
+                t[0][lane] += wx * x;
+                t[1][lane] += wx * y;
+                t[2][lane] += wx * z;
+                t[3][lane] += wy * y;
+                t[4][lane] += wy * z;
+                t[5][lane] += w * z * z;
+                tw[lane] += w;
+                let within = valid & (d2 < radii.r2);
+                let e = masked((1.0 - d2 * radii.inv_r2) * m, within);
+                let phi3 = gp4[lane];
+                let ep = e * phi3;
+                iso[lane] += ep;
+                second[lane] += ep * phi3;
+                inside[lane] += masked(m, within);
+            }
+        }
+        for (acc, v) in self.structure.iter_mut().zip(t) {
+            *acc += total(v);
+        }
+        self.structure_weight += total(tw);
+        self.isotropic += total(iso);
+        self.second_moment += total(second);
+        self.inside += total(inside);
+    }
+
+    /// Adds site `i` to every sum it is within reach of (in the field's scaled units, like
+    /// [`AnalysisSums::scan_run`]).
+    #[inline]
+    fn add_site(&mut self, field: &GradientField, i: usize, q: Vec3, radii: &ScanRadii) {
+        let c = field.site_columns();
+        let [xs, ys, zs] = c.position;
+        let [gx, gy, gz] = c.gradient;
+        let weight = c.weight[i];
+        let d2 = (Vec3::new(xs[i], ys[i], zs[i]) - q).length_squared();
+        if d2 < radii.r2 {
+            let e = ((1.0 - d2 * radii.inv_r2) * weight) as f64;
+            let phi3 = c.power[i] as f64;
+            self.isotropic += e * phi3;
+            self.second_moment += e * phi3 * phi3;
+            self.inside += weight as f64;
+        }
+        if d2 < radii.rho2 {
+            let w = ((1.0 - d2 * radii.inv_rho2) * weight) as f64;
+            let g = DVec3::new(gx[i] as f64, gy[i] as f64, gz[i] as f64);
+            let o = [
+                g.x * g.x,
+                g.x * g.y,
+                g.x * g.z,
+                g.y * g.y,
+                g.y * g.z,
+                g.z * g.z,
+            ];
+            for (acc, v) in self.structure.iter_mut().zip(o) {
+                *acc += w * v;
+            }
+            self.structure_weight += w;
+        }
+    }
+
+    /// Adds a leaf that holds several surfaces, testing each photon's normal, and copies the
+    /// agreeing photons within `r` to the kernel's inputs.
+    fn scan_mixed(
+        &mut self,
+        map: &PhotonMap,
+        field: &GradientField,
+        query: &Query,
+        (leaf, slots): (usize, std::ops::Range<usize>),
+        radii: &ScanRadii,
+        inputs: &mut Vec<(Vec3, DVec3)>,
+    ) {
+        let mut reader = PhotonReader::new(query.normal);
+        for i in field.leaf_site_range(leaf) {
+            if reader.agrees(map.attributes(field.site_slot(i))) {
+                self.add_site(field, i, query.position, radii);
+            }
+        }
+        for slot in slots {
+            let slot = slot as u32;
+            let photon = map.attributes(slot);
+            if !reader.agrees(photon) {
+                continue;
+            }
+            let d = map.position(slot) - query.position;
+            if d.length_squared() < radii.r2 {
+                inputs.push((d, power_of(photon)));
+            }
+        }
+    }
+}
+
+/// Consecutive leaves, one surface each, that agree with a query's normal: the leaves and
+/// their slots.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LeafRun {
+    pub leaves: std::ops::Range<usize>,
+    pub slots: std::ops::Range<usize>,
+}
+
+/// The sum of a lane accumulator's lanes, in f64.
+#[inline(always)]
+fn total(a: [f32; LANES]) -> f64 {
+    ((a[0] + a[1]) + (a[2] + a[3])) as f64
+}
+
+/// Lanes of the leaf scans: four f32, one SSE register.
+const LANES: usize = 4;
+
+/// A run rounded to whole lane groups (see [`lane_end`]) as groups.
+#[inline(always)]
+fn four(a: &[f32]) -> &[[f32; LANES]] {
+    a.as_chunks::<LANES>().0
+}
+
+/// The end of a run rounded up to whole groups of [`LANES`] (the last group runs on into the
+/// next leaf's photons, which a lane mask leaves out), or `None` where that would run off
+/// arrays of length `len`.
+#[inline]
+fn lane_end(slots: &std::ops::Range<usize>, len: usize) -> Option<usize> {
+    let end = slots.start + slots.len().div_ceil(LANES) * LANES;
+    (end <= len).then_some(end)
+}
+
+/// `v` where `keep`, else 0, by bits: a select the compiler would make a branch.
+#[inline(always)]
+fn masked(v: f32, keep: bool) -> f32 {
+    f32::from_bits(v.to_bits() & u32::from(keep).wrapping_neg())
 }
 
 /// Expected variance per tangent axis of the Eq. 6 gradient from photon noise alone, where the
@@ -301,8 +546,8 @@ impl RadianceEstimate for DiffusionEstimate {
     /// gradient radius (from [`gradient_pass`] with [`DiffusionEstimate::gradient_radius`], run
     /// by a caller that times it separately). Gradients of any other radius are recomputed.
     fn prepare(&self, map: &mut PhotonMap) {
-        if map.gradients_at(self.params.gradient_radius).is_none() {
-            gradient_pass(map, self.params.gradient_radius);
+        if self.field(map).is_none() {
+            self.gradient_pass(map);
         }
     }
 
@@ -311,11 +556,102 @@ impl RadianceEstimate for DiffusionEstimate {
         let kernel = self.params.kernel.radial().prepare();
         let r2 = sq(self.params.radius);
         let metric = tensor.metric(r2);
+        let field = self.field(map).expect("analysed above");
         // The photons the analysis kept: within r, on the query's surface (its normal is X3).
-        let mut sum = DVec3::ZERO;
+        let mut sum = match self.params.kernel {
+            DiffusionKernel::Epanechnikov => {
+                let scan = EllipseScan::new(&metric, query.position);
+                let mut s = DVec3::ZERO;
+                for run in &scratch.kernel_runs {
+                    s += scan.sum(map.tree(), field, run.slots.clone());
+                }
+                s * (2.0 / std::f64::consts::PI)
+            }
+            DiffusionKernel::Gaussian => {
+                let mut s = DVec3::ZERO;
+                for run in &scratch.kernel_runs {
+                    for slot in run.slots.clone() {
+                        let slot = slot as u32;
+                        let d = map.position(slot) - query.position;
+                        let power = power_of(map.attributes(slot));
+                        s += kernel.weight(metric.distance(d.as_dvec3())) * power;
+                    }
+                }
+                s
+            }
+        };
         for (d, power) in &scratch.kernel_inputs {
             sum += kernel.weight(metric.distance(d.as_dvec3())) * *power;
         }
         to_irradiance(sum * (tensor.plane_normalisation() / r2))
+    }
+}
+
+/// The Epanechnikov kernel `1 − dᵀD⁻¹d/r²` over runs of slots, in f32 lanes: the metric's
+/// three scaled axes, relative to the query.
+struct EllipseScan {
+    a: [Vec3; 3],
+    q: Vec3,
+}
+
+impl EllipseScan {
+    fn new(metric: &tensor::ScaledMetric, q: Vec3) -> Self {
+        Self {
+            a: metric.axes().map(|a| a.as_vec3()),
+            q,
+        }
+    }
+
+    /// `Σ (1 − y) Φ` over the run's photons with `y = dᵀD⁻¹d/r² < 1`, four lanes at a time.
+    #[inline]
+    fn sum(
+        &self,
+        tree: &crate::photon::KdTree,
+        field: &GradientField,
+        slots: std::ops::Range<usize>,
+    ) -> DVec3 {
+        let (xs, ys, zs) = tree.coordinates();
+        let [pr, pg, pb] = field.power_columns();
+        let Some(end) = lane_end(&slots, xs.len()) else {
+            let mut sum = DVec3::ZERO;
+            for slot in slots {
+                let y = self.distance(tree.point(slot) - self.q);
+                let k = if y < 1.0 { 1.0 - y } else { 0.0 };
+                sum += (k * field.power(slot as u32)).as_dvec3();
+            }
+            return sum;
+        };
+        let n = slots.len();
+        let s = slots.start..end;
+        let (xs, ys, zs) = (&xs[s.clone()], &ys[s.clone()], &zs[s.clone()]);
+        let (pr, pg, pb) = (&pr[s.clone()], &pg[s.clone()], &pb[s.clone()]);
+        let [a1, a2, a3] = self.a;
+        let q = self.q;
+        let (mut r, mut g, mut b) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+        let (xs, ys, zs) = (four(xs), four(ys), four(zs));
+        let (pr, pg, pb) = (four(pr), four(pg), four(pb));
+        for c in 0..xs.len() {
+            let (x4, y4, z4) = (xs[c], ys[c], zs[c]);
+            let (pr4, pg4, pb4) = (pr[c], pg[c], pb[c]);
+            for lane in 0..LANES {
+                let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
+                let u = dx * a1.x + dy * a1.y + dz * a1.z;
+                let v = dx * a2.x + dy * a2.y + dz * a2.z;
+                let w = dx * a3.x + dy * a3.y + dz * a3.z;
+                let y = u * u + v * v + w * w;
+                let k = masked(1.0 - y, (c * LANES + lane < n) & (y < 1.0));
+                r[lane] += k * pr4[lane];
+                g[lane] += k * pg4[lane];
+                b[lane] += k * pb4[lane];
+            }
+        }
+        DVec3::new(total(r), total(g), total(b))
+    }
+
+    #[inline]
+    fn distance(&self, d: Vec3) -> f32 {
+        let [a1, a2, a3] = self.a;
+        let (u, v, w) = (d.dot(a1), d.dot(a2), d.dot(a3));
+        u * u + v * v + w * w
     }
 }

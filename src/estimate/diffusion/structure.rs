@@ -66,6 +66,29 @@ impl StructureTensor {
         self.weight += weight;
     }
 
+    /// Adds a weighted sum of world-space outer products `Σ w g gᵀ` (`sum`: xx, xy, xz, yy,
+    /// yz, zz) whose weights sum to `weight`: projecting the sum equals summing the
+    /// projections, so a scan may add a whole run of photons at once.
+    #[inline]
+    pub fn add_world_sum(&mut self, sum: [f64; 6], weight: f64) {
+        let [xx, xy, xz, yy, yz, zz] = sum;
+        let apply = |v: DVec3| {
+            DVec3::new(
+                xx * v.x + xy * v.y + xz * v.z,
+                xy * v.x + yy * v.y + yz * v.z,
+                xz * v.x + yz * v.y + zz * v.z,
+            )
+        };
+        let (t1, t2) = (self.frame.t1, self.frame.t2);
+        let s1 = apply(t1);
+        self.sum += SymmetricTensor2 {
+            xx: t1.dot(s1),
+            xy: t2.dot(s1),
+            yy: t2.dot(apply(t2)),
+        };
+        self.weight += weight;
+    }
+
     /// The averaged tensor in tangent-plane coordinates (zero when nothing was added).
     pub fn average(&self) -> SymmetricTensor2 {
         if self.weight > 0.0 {

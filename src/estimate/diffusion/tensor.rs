@@ -166,6 +166,11 @@ pub struct ScaledMetric {
 
 impl ScaledMetric {
     #[inline(always)]
+    /// The three scaled axes `a_i`.
+    pub fn axes(&self) -> [DVec3; 3] {
+        [self.a1, self.a2, self.a3]
+    }
+
     pub fn distance(&self, d: DVec3) -> f64 {
         let (a, b, c) = (d.dot(self.a1), d.dot(self.a2), d.dot(self.a3));
         a * a + b * b + c * c
