@@ -450,12 +450,11 @@ fn diffuse_first_hits(world: &World) -> Vec<(usize, usize)> {
     for y in 0..cam.height as usize {
         for x in 0..cam.width as usize {
             let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
-            if let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY) {
-                if let Surface::Material(m) = hit.surface {
-                    if matches!(world.material(m), Material::Diffuse { .. }) {
-                        out.push((x, y));
-                    }
-                }
+            if let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY)
+                && let Surface::Material(m) = hit.surface
+                && matches!(world.material(m), Material::Diffuse { .. })
+            {
+                out.push((x, y));
             }
         }
     }

@@ -198,10 +198,10 @@ fn glass_sphere_radiance(b: f64, max_depth: u32) -> f64 {
         x += -2.0 * x.dot(dir) * dir; // the chord to the sphere's far side
         let inward = -x; // unit normal facing the inside, where the ray arrives from
         let f = fresnel(-dir.dot(inward), IOR, 1.0);
-        if let Some(out) = refract(dir, inward, IOR) {
-            if hits_light(x, out) {
-                total += weight * (1.0 - f);
-            }
+        if let Some(out) = refract(dir, inward, IOR)
+            && hits_light(x, out)
+        {
+            total += weight * (1.0 - f);
         }
         dir = reflect(dir, inward);
         weight *= f;

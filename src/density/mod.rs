@@ -345,11 +345,11 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
         }
         seconds.estimate += start.elapsed().as_secs_f64();
         let done = pass + 1;
-        if let (Some(d), Some(t)) = (&distribution, &truth) {
-            if done.is_power_of_two() || done == args.passes {
-                let mean = mean_values(&sums, done);
-                progression.push((done, Metrics::new(&mean, t, &regions(d, &grid, widths))));
-            }
+        if let (Some(d), Some(t)) = (&distribution, &truth)
+            && (done.is_power_of_two() || done == args.passes)
+        {
+            let mean = mean_values(&sums, done);
+            progression.push((done, Metrics::new(&mean, t, &regions(d, &grid, widths))));
         }
         last_map = Some((map, resolved));
     }

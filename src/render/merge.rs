@@ -143,14 +143,14 @@ pub fn run(args: &MergeArgs) -> Result<MergeOutcome, MergeError> {
     if let Some(path) = &args.film {
         film_file::write(path, &merged)?;
     }
-    if let Some(path) = &args.kernel_field {
-        if !write_kernel_field(path, &merged)? {
-            return Err(MergeError::Invalid(format!(
-                "--kernel-field {}: the films carry no kernel field (diffusion estimate, EXR or \
+    if let Some(path) = &args.kernel_field
+        && !write_kernel_field(path, &merged)?
+    {
+        return Err(MergeError::Invalid(format!(
+            "--kernel-field {}: the films carry no kernel field (diffusion estimate, EXR or \
                  --kernel-field output)",
-                path.display()
-            )));
-        }
+            path.display()
+        )));
     }
     Ok(MergeOutcome {
         film: merged,

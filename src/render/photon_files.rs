@@ -71,18 +71,18 @@ pub(super) fn save_maps(
 /// Checks `--save-photons` / `--load-photons` before any work: a file to load exists, a file
 /// to save goes to an existing directory and is not the output image.
 pub(super) fn validate_photon_files(args: &RenderArgs, output: &Path) -> Result<(), RenderError> {
-    if let Some(path) = &args.load_photons {
-        if !path.is_file() {
-            let why = if path.exists() {
-                "is not a file"
-            } else {
-                "does not exist"
-            };
-            return Err(RenderError::Invalid(format!(
-                "--load-photons {}: {why}",
-                path.display()
-            )));
-        }
+    if let Some(path) = &args.load_photons
+        && !path.is_file()
+    {
+        let why = if path.exists() {
+            "is not a file"
+        } else {
+            "does not exist"
+        };
+        return Err(RenderError::Invalid(format!(
+            "--load-photons {}: {why}",
+            path.display()
+        )));
     }
     if let Some(path) = &args.save_photons {
         if path == output {

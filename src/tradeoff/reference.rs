@@ -165,17 +165,18 @@ pub fn ensure(
     cache_dir: &Path,
 ) -> Result<Reference, ReferenceError> {
     let path = cache_path(target, settings, cache_dir)?;
-    if let Ok(image) = image_io::read_pfm(&path) {
-        if image.width == target.width() && image.height == target.height() {
-            return Ok(Reference {
-                path,
-                image,
-                reused: true,
-                seconds: 0.0,
-                radius: None,
-                half_change: None,
-            });
-        }
+    if let Ok(image) = image_io::read_pfm(&path)
+        && image.width == target.width()
+        && image.height == target.height()
+    {
+        return Ok(Reference {
+            path,
+            image,
+            reused: true,
+            seconds: 0.0,
+            radius: None,
+            half_change: None,
+        });
     }
     let start = Instant::now();
     let schedule = Schedule::new(DEFAULT_ALPHA, settings.seed);

@@ -137,7 +137,7 @@ pub fn is_site(slot: u32, m: u32) -> bool {
     h ^= h >> 32;
     h = h.wrapping_mul(0xD6E8_FEB8_6659_FD93);
     h ^= h >> 32;
-    h % m as u64 == 0
+    h.is_multiple_of(m as u64)
 }
 
 #[cfg(test)]
