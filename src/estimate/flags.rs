@@ -106,9 +106,10 @@ pub struct EstimatorFlags {
     /// gets a gradient). Where a disc would hold more than twice this many photons (a
     /// concentrated caustic, or a radius far above the photon spacing) the gradient pass
     /// takes gradients at one photon in m only, each standing for m, so its cost follows
-    /// what the structure tensor needs rather than the photon pile-up. 256 moved no error of
-    /// the constructed distribution's table by more than 0.3% (BENCHMARKS.md).
-    #[arg(long, default_value_t = 256.0, allow_negative_numbers = true)]
+    /// what the structure tensor needs rather than the photon pile-up. 512 moved no error of
+    /// the constructed distribution's table by more than 1% (256: the flat-region noise of
+    /// the absolute-K rows by 3.6%; BENCHMARKS.md).
+    #[arg(long, default_value_t = 512.0, allow_negative_numbers = true)]
     pub gradient_sites: f64,
 
     /// Kernel of the diffusion estimate, evaluated at the Mahalanobis distance. Epanechnikov

@@ -4,9 +4,10 @@
 //! Memory: a position lives only in the kd-tree (12 bytes, one array per axis), the rest of
 //! the photon beside it as [`PhotonAttributes`] (8 bytes), the tree adds its source index (4)
 //! and split planes (~0.3): about 24.3 bytes per photon. The [`GradientField`], while a
-//! diffusion estimate reads the map, adds 12 per photon (the decoded power as f32 arrays in
-//! slot order, which the estimate's leaf scans stream through) and 36 per gradient site (every
-//! photon, except where sites are thinned): at most 72.3 ([`PhotonMap::bytes_per_photon`]).
+//! diffusion estimate reads the map, adds 16 per photon (the decoded power and the channel
+//! sum as f32 arrays in slot order, which the estimate's leaf scans stream through) and 32
+//! per gradient site (every photon, except where sites are thinned): at most 72.3
+//! ([`PhotonMap::bytes_per_photon`]).
 
 use super::{KdTree, Photon, PhotonAttributes};
 use glam::Vec3;
@@ -150,8 +151,9 @@ pub struct GradientField {
     site_position: [Vec<f32>; 3],
     site_gradient: [Vec<f32>; 3],
     site_weight: Vec<f32>,
-    /// The site's photon's channel sum (three times its scalar power) over `power_scale`.
-    site_power: Vec<f32>,
+    /// Each photon's channel sum (three times its scalar power) over `power_scale`, in slot
+    /// order.
+    channel_sum: Vec<f32>,
     power_scale: f64,
     /// The site gradients are stored over this.
     gradient_scale: f64,
@@ -167,8 +169,6 @@ pub struct SiteColumns<'a> {
     pub position: [&'a [f32]; 3],
     pub gradient: [&'a [f32]; 3],
     pub weight: &'a [f32],
-    /// The site's photon's channel sum over [`GradientField::power_scale`].
-    pub power: &'a [f32],
 }
 
 /// The power of two at or above `largest` (1 for zero or non-finite), so that values over it
@@ -224,7 +224,12 @@ impl GradientField {
                 .filter(|v| v.is_finite())
                 .fold(0.0f32, f32::max)
         };
-        field.power_scale = scale_for(largest(&phi3));
+        field.power_scale = scale_for(
+            (0..map.len())
+                .map(phi3)
+                .filter(|v| v.is_finite())
+                .fold(0.0f32, f32::max),
+        );
         field.gradient_scale = scale_for(largest(&|s| gradients[s].abs().max_element()));
         let (ps, gs) = (
             (1.0 / field.power_scale) as f32,
@@ -235,7 +240,7 @@ impl GradientField {
             field.site_gradient[c].reserve_exact(sites);
         }
         field.site_weight.reserve_exact(sites);
-        field.site_power.reserve_exact(sites);
+        field.channel_sum = (0..map.len()).map(|s| phi3(s) * ps).collect();
         field.site_slot.reserve_exact(sites);
         field
             .leaf_sites
@@ -250,7 +255,6 @@ impl GradientField {
                         field.site_gradient[c].push(g[c]);
                     }
                     field.site_weight.push(weights[s]);
-                    field.site_power.push(phi3(s) * ps);
                     field.site_slot.push(s as u32);
                 }
             }
@@ -281,7 +285,7 @@ impl GradientField {
     pub fn radius(&self) -> f32 {
         self.radius
     }
-    /// What the site columns' powers are to be multiplied by.
+    /// What [`GradientField::channel_sums`] are to be multiplied by.
     pub fn power_scale(&self) -> f64 {
         self.power_scale
     }
@@ -339,8 +343,12 @@ impl GradientField {
             position: [px, py, pz],
             gradient: [gx, gy, gz],
             weight: &self.site_weight,
-            power: &self.site_power,
         }
+    }
+    /// Each photon's channel sum over [`GradientField::power_scale`], in slot order.
+    #[inline]
+    pub fn channel_sums(&self) -> &[f32] {
+        &self.channel_sum
     }
     /// The power columns (r, g, b) in slot order.
     #[inline]
@@ -366,7 +374,7 @@ impl GradientField {
             .chain(&self.site_gradient)
             .map(Vec::capacity)
             .sum();
-        (floats + self.site_weight.capacity() + self.site_power.capacity()) * size_of::<f32>()
+        (floats + self.site_weight.capacity() + self.channel_sum.capacity()) * size_of::<f32>()
             + (self.site_slot.capacity() + self.leaf_sites.capacity()) * size_of::<u32>()
             + self.leaf_normals.capacity() * size_of::<Option<Vec3>>()
     }

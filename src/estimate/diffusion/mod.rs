@@ -247,7 +247,7 @@ impl DiffusionEstimate {
             },
         );
         for run in runs.iter() {
-            sums.scan_run(field, query.position, run, &radii);
+            sums.scan_run(tree, field, query.position, run, &radii);
         }
         for leaf in mixed {
             sums.scan_mixed(map, field, query, leaf, &radii, inputs);
@@ -332,19 +332,72 @@ struct AnalysisSums {
     structure_weight: f64,
     isotropic: f64,
     second_moment: f64,
-    /// Photons within `r` (the sites' weights summed).
+    /// Photons within `r`.
     inside: f64,
 }
 
 impl AnalysisSums {
-    /// Adds a run of leaves whose photons all agree with the query's normal, by its sites
-    /// (every photon, but where sites are thinned: then each site stands for its weight's
-    /// worth of photons in every sum), four lanes at a time over the field's arrays (f32
-    /// within a run, f64 across runs).
+    /// Adds a run of leaves whose photons all agree with the query's normal: its sites (every
+    /// photon, but where sites are thinned: then each stands for its weight's worth) to the
+    /// structure tensor, its photons to the isotropic sums, four lanes at a time over the
+    /// field's arrays (f32 within a run, f64 across runs, all in the field's scaled units).
     #[inline]
-    fn scan_run(&mut self, field: &GradientField, q: Vec3, run: &LeafRun, radii: &ScanRadii) {
+    fn scan_run(
+        &mut self,
+        tree: &crate::photon::KdTree,
+        field: &GradientField,
+        q: Vec3,
+        run: &LeafRun,
+        radii: &ScanRadii,
+    ) {
         let sites = field.leaf_site_range(run.leaves.start).start
             ..field.leaf_site_range(run.leaves.end - 1).end;
+        self.scan_sites(field, q, sites, radii);
+        let (xs, ys, zs) = tree.coordinates();
+        let phi = field.channel_sums();
+        let slots = run.slots.clone();
+        let Some(end) = lane_end(&slots, xs.len()) else {
+            for s in slots {
+                self.add_isotropic((tree.point(s) - q).length_squared(), phi[s], radii);
+            }
+            return;
+        };
+        let n = slots.len();
+        let s = slots.start..end;
+        let (xs, ys, zs) = (
+            four(&xs[s.clone()]),
+            four(&ys[s.clone()]),
+            four(&zs[s.clone()]),
+        );
+        let phi = four(&phi[s]);
+        let (mut iso, mut second, mut inside) = ([0.0f32; LANES], [0.0f32; LANES], [0u32; LANES]);
+        for c in 0..xs.len() {
+            let (x4, y4, z4, p4) = (xs[c], ys[c], zs[c], phi[c]);
+            for lane in 0..LANES {
+                let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
+                let d2 = dx * dx + dy * dy + dz * dz;
+                let within = (c * LANES + lane < n) & (d2 < radii.r2);
+                let ep = masked(1.0 - d2 * radii.inv_r2, within) * p4[lane];
+                iso[lane] += ep;
+                second[lane] += ep * p4[lane];
+                inside[lane] += u32::from(within);
+            }
+        }
+        self.isotropic += total(iso);
+        self.second_moment += total(second);
+        self.inside += inside.iter().sum::<u32>() as f64;
+    }
+
+    /// Adds the sites `sites` (indices into the field's site arrays) within `ρ` to the
+    /// structure tensor, four lanes at a time.
+    #[inline]
+    fn scan_sites(
+        &mut self,
+        field: &GradientField,
+        q: Vec3,
+        sites: std::ops::Range<usize>,
+        radii: &ScanRadii,
+    ) {
         let columns = field.site_columns();
         let [xs, ys, zs] = columns.position;
         let Some(end) = lane_end(&sites, xs.len()) else {
@@ -366,19 +419,17 @@ impl AnalysisSums {
             four(&gy[s.clone()]),
             four(&gz[s.clone()]),
         );
-        let (gw, gp) = (four(&columns.weight[s.clone()]), four(&columns.power[s]));
+        let gw = four(&columns.weight[s]);
         let mut t = [[0.0f32; LANES]; 6];
         let mut tw = [0.0f32; LANES];
-        let (mut iso, mut second, mut inside) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
         for c in 0..xs.len() {
             let (x4, y4, z4) = (xs[c], ys[c], zs[c]);
-            let (gx4, gy4, gz4, gw4, gp4) = (gx[c], gy[c], gz[c], gw[c], gp[c]);
+            let (gx4, gy4, gz4, gw4) = (gx[c], gy[c], gz[c], gw[c]);
             for lane in 0..LANES {
                 let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
                 let d2 = dx * dx + dy * dy + dz * dz;
-                let valid = c * LANES + lane < n;
-                let m = gw4[lane];
-                let w = masked((1.0 - d2 * radii.inv_rho2) * m, valid & (d2 < radii.rho2));
+                let keep = (c * LANES + lane < n) & (d2 < radii.rho2);
+                let w = masked((1.0 - d2 * radii.inv_rho2) * gw4[lane], keep);
                 let (x, y, z) = (gx4[lane], gy4[lane], gz4[lane]);
                 let (wx, wy) = (w * x, w * y);
                 t[0][lane] += wx * x;
@@ -388,42 +439,23 @@ impl AnalysisSums {
                 t[4][lane] += wy * z;
                 t[5][lane] += w * z * z;
                 tw[lane] += w;
-                let within = valid & (d2 < radii.r2);
-                let e = masked((1.0 - d2 * radii.inv_r2) * m, within);
-                let phi3 = gp4[lane];
-                let ep = e * phi3;
-                iso[lane] += ep;
-                second[lane] += ep * phi3;
-                inside[lane] += masked(m, within);
             }
         }
         for (acc, v) in self.structure.iter_mut().zip(t) {
             *acc += total(v);
         }
         self.structure_weight += total(tw);
-        self.isotropic += total(iso);
-        self.second_moment += total(second);
-        self.inside += total(inside);
     }
 
-    /// Adds site `i` to every sum it is within reach of (in the field's scaled units, like
-    /// [`AnalysisSums::scan_run`]).
+    /// Adds site `i` to the structure tensor if it is within `ρ` of `q`.
     #[inline]
     fn add_site(&mut self, field: &GradientField, i: usize, q: Vec3, radii: &ScanRadii) {
         let c = field.site_columns();
         let [xs, ys, zs] = c.position;
         let [gx, gy, gz] = c.gradient;
-        let weight = c.weight[i];
         let d2 = (Vec3::new(xs[i], ys[i], zs[i]) - q).length_squared();
-        if d2 < radii.r2 {
-            let e = ((1.0 - d2 * radii.inv_r2) * weight) as f64;
-            let phi3 = c.power[i] as f64;
-            self.isotropic += e * phi3;
-            self.second_moment += e * phi3 * phi3;
-            self.inside += weight as f64;
-        }
         if d2 < radii.rho2 {
-            let w = ((1.0 - d2 * radii.inv_rho2) * weight) as f64;
+            let w = ((1.0 - d2 * radii.inv_rho2) * c.weight[i]) as f64;
             let g = DVec3::new(gx[i] as f64, gy[i] as f64, gz[i] as f64);
             let o = [
                 g.x * g.x,
@@ -438,6 +470,21 @@ impl AnalysisSums {
             }
             self.structure_weight += w;
         }
+    }
+
+    /// Adds one photon at squared distance `d2` with channel sum `phi` (scaled) to the
+    /// isotropic sums; returns whether it is within `r`.
+    #[inline]
+    fn add_isotropic(&mut self, d2: f32, phi: f32, radii: &ScanRadii) -> bool {
+        if d2 < radii.r2 {
+            let e = (1.0 - d2 * radii.inv_r2) as f64;
+            let phi = phi as f64;
+            self.isotropic += e * phi;
+            self.second_moment += e * phi * phi;
+            self.inside += 1.0;
+            return true;
+        }
+        false
     }
 
     /// Adds a leaf that holds several surfaces, testing each photon's normal, and copies the
@@ -464,7 +511,11 @@ impl AnalysisSums {
                 continue;
             }
             let d = map.position(slot) - query.position;
-            if d.length_squared() < radii.r2 {
+            if self.add_isotropic(
+                d.length_squared(),
+                field.channel_sums()[slot as usize],
+                radii,
+            ) {
                 inputs.push((d, power_of(photon)));
             }
         }
