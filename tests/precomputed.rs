@@ -2,7 +2,8 @@
 //! lookup agrees with the full k-NN estimate and with the analytic irradiance, and reads only
 //! the surface it is asked about; a final-gather render of the Cornell box with the table
 //! agrees with one running the estimate per gather ray; and the image does not depend on the
-//! thread count.
+//! thread count. Also `--light-samples`: N stratified shadow rays per area light keep the
+//! mean and cut the noise by more than N independent ones would.
 
 mod support;
 
@@ -216,5 +217,75 @@ fn the_table_and_light_samples_do_not_depend_on_the_thread_count() {
     assert!(
         std::fs::read(&out1).unwrap() == std::fs::read(&out2).unwrap(),
         "1 and 2 threads wrote different bytes"
+    );
+}
+
+/// A floor under a 1 × 1 quad light one unit above it, seen obliquely: direct light only.
+const QUAD_OVER_FLOOR: &str = r#"
+[camera]
+position = [0.0, 1.5, 3.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 40.0
+resolution = [40, 30]
+
+[[lights]]
+type = "quad"
+corner = [-0.5, 1.0, -0.5]
+edge_u = [1.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, 1.0]
+power = [10.0, 10.0, 10.0]
+
+[materials.white]
+type = "diffuse"
+albedo = [0.8, 0.8, 0.8]
+
+[[objects]]
+type = "quad"
+corner = [-3.0, 0.0, -3.0]
+edge_u = [0.0, 0.0, 6.0]
+edge_v = [6.0, 0.0, 0.0]
+material = "white"
+"#;
+
+/// Mean and mean squared difference of horizontally neighbouring pixels (relative to the
+/// mean²): the light's falloff is smooth at this resolution, so the latter is mostly noise.
+fn mean_and_roughness(image: &dpm::image_io::Image) -> (f64, f64) {
+    let v = |x: usize, y: usize| image.pixels[y * image.width + x].x as f64;
+    let mut sum = 0.0;
+    let mut rough = 0.0;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            sum += v(x, y);
+            if x + 1 < image.width {
+                rough += (v(x + 1, y) - v(x, y)).powi(2);
+            }
+        }
+    }
+    let n = (image.width * image.height) as f64;
+    let mean = sum / n;
+    (mean, rough / (n * mean * mean))
+}
+
+#[test]
+fn light_samples_stratify_the_area_light_and_keep_its_mean() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "quad.toml", QUAD_OVER_FLOOR);
+    let run = |n: &str| {
+        let out = dir.path().join(format!("l{n}.pfm"));
+        let args = [path_str(&scene), "-o", path_str(&out), "--light-samples", n];
+        let outcome = pipeline::run(&render_args(&args)).expect("render");
+        mean_and_roughness(&outcome.image)
+    };
+    let (m1, r1) = run("1");
+    let (m16, r16) = run("16");
+    // One sample a pixel has a relative sd of about 0.65, so the mean of 1200 pixels is
+    // within about 2% (seen: 1%); a sum not divided by the count would be 16 times too bright.
+    assert!((m16 / m1 - 1.0).abs() < 0.06, "means {m1} vs {m16}");
+    // Independent samples would cut the noise variance 16-fold; a stratified set of 16 much
+    // more, down to the falloff's own pixel-to-pixel change.
+    assert!(
+        r16 < r1 / 16.0,
+        "roughness {r1} with one sample, {r16} with 16"
     );
 }
