@@ -54,7 +54,13 @@ fn lookups_agree_with_the_full_estimate_and_the_analytic_irradiance() {
     let estimate = KnnEstimate::new(RadialKernel::Constant, K, Some(reach));
     let table =
         PrecomputedIrradiance::build(&map, &estimate, 4, Some(reach), &ProgressBar::hidden());
-    assert_eq!(table.len(), map.len().div_ceil(4));
+    // One photon in 4, chosen at random: 100,000 ± 274.
+    let expected = map.len() as f64 / 4.0;
+    assert!(
+        (table.len() as f64 / expected - 1.0).abs() < 0.01,
+        "{} points",
+        table.len()
+    );
     let mut scratch = Scratch::default();
     let mut rng = Rng::for_index(4, Stream::Distribution, 0);
     let (mut full, mut looked, mut diff2, mut noise2) = ([0.0f64; 2], [0.0f64; 2], 0.0, 0.0);

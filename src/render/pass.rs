@@ -254,8 +254,7 @@ impl PassContext<'_> {
                     && self.settings.irradiance_stride > 0 =>
             {
                 let stride = self.settings.irradiance_stride;
-                let points = map.len().div_ceil(stride) as u64;
-                let bar = progress(points, "precompute irradiance");
+                let bar = progress(map.len().div_ceil(stride) as u64, "precompute irradiance");
                 let start = Instant::now();
                 // Lookups search as far as the estimate itself may reach: pass 0's
                 // k-equivalent radius, shrinking with the passes like the estimate's cap.
@@ -269,7 +268,7 @@ impl PassContext<'_> {
                 times.accumulate(
                     "precompute irradiance",
                     start.elapsed(),
-                    &[("points", points)],
+                    &[("points", table.len() as u64)],
                 );
                 if crate::interrupt::requested() {
                     return Ok(None);

@@ -133,8 +133,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
     pub global_k: usize,
 
-    /// With final gathering, the global estimate is computed once per pass at every N-th
-    /// photon of the global map and a gather ray reads the nearest such point whose normal
+    /// With final gathering, the global estimate is computed once per pass at one photon in N
+    /// of the global map and a gather ray reads the nearest such point whose normal
     /// agrees (Christensen's precomputed irradiance) instead of running its own estimate;
     /// 0 turns it off (a k-NN estimate per gather ray).
     #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true)]
