@@ -161,7 +161,7 @@ fn gather(c: &mut Criterion) {
     let per_query = |key| samples.median(key) / QUERIES as f64 * 1e9;
     let (e, l) = (per_query("estimate"), per_query("lookup"));
     println!(
-        "\nCornell box global map, {} photons; table of every {DEFAULT_STRIDE}th: {} points, \
+        "\nCornell box global map, {} photons; table of one photon in {DEFAULT_STRIDE}: {} points, \
          {} heap bytes; {fallbacks} of {QUERIES} lookups fell back to the estimate",
         map.len(),
         table.len(),
