@@ -215,6 +215,7 @@ fn whitted(world: &World, max_depth: u32) -> Integrator<'_> {
         caustics: None,
         indirect: Indirect::None,
         max_depth,
+        light_samples: 1,
     }
 }
 

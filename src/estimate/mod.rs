@@ -7,6 +7,8 @@
 //! - [`classic`]: k-nearest-neighbour estimates (simple, cone, Gaussian) and the fixed-radius
 //!   Epanechnikov estimate.
 //! - [`diffusion`]: the diffusion based estimate (gradient pass, structure and diffusion tensors).
+//! - [`precomputed`]: irradiance precomputed at a subset of a global map's photons, read by
+//!   final-gather rays instead of a k-NN estimate each.
 //! - [`settings`]: the command-line settings shared by `dpm render` and `dpm density`, their
 //!   validation and the construction of an estimate from them.
 //!
@@ -21,6 +23,7 @@ pub mod classic;
 pub mod diffusion;
 pub mod flags;
 pub mod kernel;
+pub mod precomputed;
 pub mod settings;
 
 pub use classic::{FixedRadiusEstimate, KnnEstimate};
@@ -29,6 +32,7 @@ pub use diffusion::{
 };
 pub use flags::EstimatorFlags;
 pub use kernel::RadialKernel;
+pub use precomputed::PrecomputedIrradiance;
 pub use settings::{EstimateError, EstimatorKind, EstimatorSettings, ResolvedEstimator};
 
 use crate::photon::{Neighbours, Photon, PhotonMap};

@@ -1,12 +1,14 @@
 //! Where a pixel's samples go: the pinhole camera's primary rays, and the sample positions of
-//! every (seed, pass, pixel, sample). Pixel positions and the first light sample of each
-//! camera path come from one Owen-scrambled Sobol sequence per pixel (Burley 2020, the
-//! `sobol_burley` crate), indexed by `pass · spp + sample`: the passes of a progressive run
-//! keep stratifying the same pixel instead of repeating its first sample, and pixels are
-//! decorrelated by their own scramble. Everything else a path draws comes from a PCG stream
-//! keyed by the same four numbers. Owns sample placement; must not shade or accumulate.
+//! every (seed, pass, pixel, sample). Pixel positions come from one Owen-scrambled Sobol
+//! sequence per pixel (Burley 2020, the `sobol_burley` crate), indexed by `pass · spp +
+//! sample`: the passes of a progressive run keep stratifying the same pixel instead of
+//! repeating its first sample, and pixels are decorrelated by their own scramble. Light
+//! samples and final-gather directions come from the pixel's [`EyeSequence`] (one scrambled
+//! sequence per pixel and purpose, the same index, `R` consecutive points for `R` samples at a
+//! hit). Everything else a path draws comes from a PCG stream keyed by the same four numbers.
+//! Owns sample placement; must not shade or accumulate.
 
-use crate::sampling::{Rng, Stream, StreamSeed, pass_seed};
+use crate::sampling::{EyeSequence, Rng, SOBOL_BLOCK, Stream, StreamSeed, pass_seed};
 use crate::scene::Camera;
 use glam::Vec3;
 
@@ -63,8 +65,8 @@ impl PinholeCamera {
 pub struct CameraSample {
     /// Position inside the pixel, each in [0, 1).
     pub jitter: (f32, f32),
-    /// The first direct-light sample of the path (at its first diffuse hit).
-    pub light: (f32, f32),
+    /// The path's place in the pixel's light and gather sequences.
+    pub sequence: EyeSequence,
     pub rng: Rng,
 }
 
@@ -77,9 +79,6 @@ pub struct PassSamples {
     /// The seed's pixel stream of this pass (the PCG part).
     stream: StreamSeed,
 }
-
-/// Sequence length `sobol_burley` supports: longer runs take a fresh scramble per block.
-const SOBOL_BLOCK: u64 = 1 << 16;
 
 impl PassSamples {
     pub fn new(seed: u64, pass: u64, spp: u32) -> Self {
@@ -102,10 +101,15 @@ impl PassSamples {
         let scramble = StreamSeed::new(self.seed, Stream::Pixels)
             .rng(pixel ^ (index / SOBOL_BLOCK).wrapping_mul(0x9E37_79B9_7F4A_7C15))
             .next_u32();
-        let [x, y, lu, lv] = sobol_burley::sample_4d((index % SOBOL_BLOCK) as u32, 0, scramble);
+        let [x, y, _, _] = sobol_burley::sample_4d((index % SOBOL_BLOCK) as u32, 0, scramble);
         CameraSample {
             jitter: (x, y),
-            light: (lu, lv),
+            sequence: EyeSequence::new(
+                StreamSeed::new(self.seed, Stream::EyeSequences)
+                    .rng(pixel)
+                    .next_u64(),
+                index,
+            ),
             rng: self.stream.rng(pixel * self.spp as u64 + s as u64),
         }
     }

@@ -4,7 +4,7 @@
 //! | offset | bytes | what |
 //! |---|---|---|
 //! | 0 | 8 | magic `DPMFILM\0` |
-//! | 8 | 4 | version (1), little-endian |
+//! | 8 | 4 | version (2), little-endian |
 //! | 12 | 4 | header length `H` (at most 1 MiB) |
 //! | 16 | H | header: UTF-8 TOML (the [`FilmHeader`] and the pass ranges) |
 //! | 16 + H | 8·W·H'·C | the sums, f64 little-endian, pixel-major, C channels per pixel |
@@ -21,7 +21,9 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"DPMFILM\0";
-pub const VERSION: u32 = 1;
+/// 2: the settings gained `irradiance-stride` and `light-samples`, and light and gather
+/// samples became stratified, so version-1 films would not merge with new passes anyway.
+pub const VERSION: u32 = 2;
 const MAX_HEADER: u64 = 1 << 20;
 
 #[derive(Debug, thiserror::Error)]

@@ -1,15 +1,15 @@
 //! The eye pass's integrator: Whitted-style recursion through mirrors and glass (Fresnel, total
 //! internal reflection) to a depth limit; at diffuse surfaces direct light by shadow rays, the
-//! caustic map's estimate, and indirect light from the global map (final gathering, or the
-//! map shown directly). Radiance comes back split into its direct, caustic and indirect parts,
+//! caustic map's estimate, and indirect light from the global map (final gathering, reading
+//! the precomputed irradiance where there is one, or the map shown directly). Radiance comes back split into its direct, caustic and indirect parts,
 //! the film's layers. Knows nothing of passes or pixels: a camera path brings its own
 //! [`PathSampler`]. Owns shading; must not build maps or write images.
 
-use crate::estimate::{Query, RadianceEstimate, Scratch};
+use crate::estimate::{PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
 use crate::sampling::{PathSampler, cosine_hemisphere};
-use crate::scene::Material;
+use crate::scene::{Light, Material};
 use crate::world::lights::{emitted_radiance, sample_incident};
 use crate::world::{Surface, World};
 use glam::Vec3;
@@ -76,10 +76,12 @@ pub enum Indirect<'a> {
     /// The global map's estimate at the eye ray's diffuse hit (it holds indirect photons only).
     Visualize(EstimatedMap<'a>),
     /// `rays` cosine-distributed gather rays, each reading the global map (which then holds
-    /// every diffuse photon) where it lands.
+    /// every diffuse photon) where it lands: the nearest agreeing point of `precomputed` when
+    /// there is one, else the map's estimate.
     FinalGather {
         map: EstimatedMap<'a>,
         rays: u32,
+        precomputed: Option<&'a PrecomputedIrradiance>,
     },
 }
 
@@ -89,6 +91,9 @@ pub struct Integrator<'a> {
     pub indirect: Indirect<'a>,
     /// Specular bounces followed from the eye.
     pub max_depth: u32,
+    /// Shadow rays per area light (sphere or quad) at each diffuse eye hit; a point light
+    /// takes one.
+    pub light_samples: u32,
 }
 
 /// Specular bounces a gather ray follows before giving up.
@@ -126,14 +131,15 @@ impl Integrator<'_> {
                     normal: ns,
                 };
                 let brdf = *albedo * FRAC_1_PI;
+                let at = sampler.next_diffuse_hit();
                 let caustic = match &self.caustics {
                     Some(c) => brdf * c.irradiance(&query, scratch),
                     None => Vec3::ZERO,
                 };
                 Radiance {
-                    direct: brdf * self.direct(p, ns, sampler),
+                    direct: brdf * self.direct(p, ns, at, sampler),
                     caustic,
-                    indirect: *albedo * self.indirect(p, ns, &query, sampler, scratch),
+                    indirect: *albedo * self.indirect(p, ns, at, &query, sampler, scratch),
                 }
             }
             Material::Mirror if depth < self.max_depth => {
@@ -183,22 +189,32 @@ impl Integrator<'_> {
         self.offset(p, if d.dot(ng) >= 0.0 { ng } else { -ng })
     }
 
-    /// Direct irradiance at `p` with normal `n`: one shadow-tested sample per light.
-    fn direct(&self, p: Vec3, n: Vec3, sampler: &mut PathSampler) -> Vec3 {
+    /// Direct irradiance at `p` with normal `n` (diffuse hit `at` of the path): the mean of
+    /// `light_samples` shadow-tested samples per area light, stratified (see
+    /// [`PathSampler::light_2d`]), and one per point light, which has nothing to stratify.
+    fn direct(&self, p: Vec3, n: Vec3, at: u32, sampler: &mut PathSampler) -> Vec3 {
         let mut e = Vec3::ZERO;
-        for light in &self.world.description.lights {
-            let Some(s) = sample_incident(light, p, sampler.light_2d()) else {
-                continue;
+        for (l, light) in self.world.description.lights.iter().enumerate() {
+            let count = match light {
+                Light::Point { .. } => 1,
+                _ => self.light_samples.max(1),
             };
-            let cos = n.dot(s.direction);
-            if cos <= 0.0 {
-                continue;
+            let mut sum = Vec3::ZERO;
+            for j in 0..count {
+                let Some(s) = sample_incident(light, p, sampler.light_2d(at, l, j, count)) else {
+                    continue;
+                };
+                let cos = n.dot(s.direction);
+                if cos <= 0.0 {
+                    continue;
+                }
+                // Stop short of the light's own surface.
+                let tfar = s.distance * (1.0 - 1e-4);
+                if !self.world.occluded(p, s.direction, 0.0, tfar) {
+                    sum += s.irradiance * cos;
+                }
             }
-            // Stop short of the light's own surface.
-            let tfar = s.distance * (1.0 - 1e-4);
-            if !self.world.occluded(p, s.direction, 0.0, tfar) {
-                e += s.irradiance * cos;
-            }
+            e += sum / count as f32;
         }
         e
     }
@@ -208,19 +224,27 @@ impl Integrator<'_> {
         &self,
         p: Vec3,
         n: Vec3,
+        at: u32,
         query: &Query,
         sampler: &mut PathSampler,
         scratch: &mut Scratch,
     ) -> Vec3 {
-        let rng = &mut sampler.rng;
         match &self.indirect {
             Indirect::None => Vec3::ZERO,
+            // Shown directly, the map keeps its own estimate: one per eye hit costs little
+            // beside R gather rays, and the nearest precomputed point's piecewise-constant
+            // cells would be seen as such.
             Indirect::Visualize(g) => g.irradiance(query, scratch) * FRAC_1_PI,
-            Indirect::FinalGather { map, rays } => {
+            Indirect::FinalGather {
+                map,
+                rays,
+                precomputed,
+            } => {
                 let mut sum = Vec3::ZERO;
-                for _ in 0..*rays {
-                    let d = cosine_hemisphere(n, rng.next_2d());
-                    sum += self.gathered(map, p, d, rng, scratch);
+                for j in 0..*rays {
+                    // Stratified over the R rays of this hit and across samples and passes.
+                    let d = cosine_hemisphere(n, sampler.gather_2d(at, j, *rays));
+                    sum += self.gathered(map, *precomputed, p, d, &mut sampler.rng, scratch);
                 }
                 // Cosine-weighted sampling: E/π is the mean incoming radiance.
                 sum / (*rays).max(1) as f32
@@ -232,6 +256,7 @@ impl Integrator<'_> {
     fn gathered(
         &self,
         map: &EstimatedMap,
+        precomputed: Option<&PrecomputedIrradiance>,
         mut o: Vec3,
         mut d: Vec3,
         rng: &mut crate::sampling::Rng,
@@ -252,7 +277,12 @@ impl Integrator<'_> {
                         position: hit.position,
                         normal: ns,
                     };
-                    return *albedo * FRAC_1_PI * map.irradiance(&q, scratch);
+                    // The full estimate where the table has no agreeing point (see
+                    // `estimate::precomputed`).
+                    let e = precomputed
+                        .and_then(|t| t.lookup(&q, scratch))
+                        .unwrap_or_else(|| map.irradiance(&q, scratch));
+                    return *albedo * FRAC_1_PI * e;
                 }
                 Material::Mirror => reflect(d, ns),
                 Material::Glass { ior } => {

@@ -1,7 +1,7 @@
 //! One pass of a progressive render, start to end: trace this pass's photon maps from its own
 //! random streams, resolve the estimates at this pass's radii (the diffusion estimate's
-//! gradient pass timed as its own phase), shade fresh pixel samples into a [`PassImage`], and
-//! drop the maps. A pass depends only on the scene, the [`RenderSettings`], the base radii,
+//! gradient pass timed as its own phase, and so is the precomputed irradiance a final gather
+//! reads), shade fresh pixel samples into a [`PassImage`], and drop the maps. A pass depends only on the scene, the [`RenderSettings`], the base radii,
 //! the seed and its index, so any pass can run anywhere and in any order. Owns the per-pass
 //! wiring; must not accumulate passes (the [`super::film`] does) or read the command line.
 //!
@@ -22,6 +22,7 @@ use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
 use super::schedule::{Schedule, fixed_radius, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::kernel::RadialKernel;
+use crate::estimate::precomputed::PrecomputedIrradiance;
 use crate::estimate::settings::k_equivalent_radius;
 use crate::estimate::{
     DiffusionEstimate, EstimateError, EstimatorSettings, Query, RadianceEstimate,
@@ -52,6 +53,11 @@ pub struct RenderSettings {
     /// Final-gather rays per diffuse eye hit (0: the global map shown directly).
     pub final_gather: u32,
     pub global_k: usize,
+    /// Irradiance precomputed at every n-th global photon for final gathering (0: a k-NN
+    /// estimate per gather ray).
+    pub irradiance_stride: usize,
+    /// Shadow rays per area light at each diffuse eye hit.
+    pub light_samples: u32,
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
     pub estimator: EstimatorSettings,
@@ -240,6 +246,36 @@ impl PassContext<'_> {
             _ => None,
         };
         let global_estimate = global_estimate(self.settings, &self.radii, &self.schedule, pass);
+        let precomputed = match &global {
+            Some((map, _))
+                if !map.is_empty()
+                    && self.settings.final_gather > 0
+                    && self.settings.irradiance_stride > 0 =>
+            {
+                let stride = self.settings.irradiance_stride;
+                let bar = progress(map.len().div_ceil(stride) as u64, "precompute irradiance");
+                let start = Instant::now();
+                // Lookups search as far as the estimate itself may reach: pass 0's
+                // k-equivalent radius, shrinking with the passes like the estimate's cap.
+                let reach = self
+                    .radii
+                    .global
+                    .map(|r| r * self.schedule.radius_scale(pass));
+                let table =
+                    PrecomputedIrradiance::build(map, &global_estimate, stride, reach, &bar);
+                bar.finish_and_clear();
+                times.accumulate(
+                    "precompute irradiance",
+                    start.elapsed(),
+                    &[("points", table.len() as u64)],
+                );
+                if crate::interrupt::requested() {
+                    return Ok(None);
+                }
+                Some(table)
+            }
+            _ => None,
+        };
         let integrator = Integrator {
             world: self.world,
             caustics: match (&caustic, &caustic_estimate) {
@@ -257,12 +293,17 @@ impl PassContext<'_> {
                     };
                     match self.settings.final_gather {
                         0 => Indirect::Visualize(m),
-                        rays => Indirect::FinalGather { map: m, rays },
+                        rays => Indirect::FinalGather {
+                            map: m,
+                            rays,
+                            precomputed: precomputed.as_ref(),
+                        },
                     }
                 }
                 _ => Indirect::None,
             },
             max_depth: self.settings.max_depth,
+            light_samples: self.settings.light_samples,
         };
         let probe = match (&caustic, &diffusion) {
             (Some((map, _)), Some(d)) if self.kernel_field => Some(KernelProbe {
@@ -373,7 +414,7 @@ pub fn shade_pass(
                     let sample = samples.sample(pixel, s);
                     let (jx, jy) = sample.jitter;
                     let d = camera.direction(x as f32 + jx, y as f32 + jy);
-                    let mut sampler = PathSampler::new(sample.rng, Some(sample.light));
+                    let mut sampler = PathSampler::new(sample.rng, Some(sample.sequence));
                     sum += integrator.radiance(camera.origin(), d, 0, &mut sampler, scratch);
                 }
                 let mean = (1.0 / spp.max(1) as f32) * sum;

@@ -19,6 +19,7 @@ use super::photon_files::{load_maps, save_maps, validate_photon_files};
 use super::schedule::{DEFAULT_ALPHA, MAX_PASSES, Schedule};
 use crate::embree::{self, EmbreeError};
 use crate::estimate::EstimatorFlags;
+use crate::estimate::precomputed::DEFAULT_STRIDE;
 use crate::estimate::settings::{EstimateError, EstimatorKind};
 use crate::image_io::{self, Image, ImageError, ImageFormat};
 use crate::photon::store::{self, StoreError};
@@ -131,6 +132,23 @@ pub struct RenderArgs {
     /// Photons per global-map estimate (constant kernel, k-th photon left out).
     #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
     pub global_k: usize,
+
+    /// With final gathering, the global estimate is computed once per pass at one photon in N
+    /// of the global map and a gather ray reads the nearest such point whose normal
+    /// agrees (Christensen's precomputed irradiance) instead of running its own estimate;
+    /// 0 turns it off (a k-NN estimate per gather ray).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true)]
+    pub irradiance_stride: usize,
+
+    /// Shadow rays per area light (sphere or quad) at each diffuse eye hit, stratified and
+    /// averaged; a point light takes one.
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1,
+        allow_negative_numbers = true
+    )]
+    pub light_samples: u32,
 
     /// Caustic radiance estimate.
     #[command(flatten)]
@@ -267,6 +285,18 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
     if args.global_k < 2 {
         return invalid(format!("--global-k {}: must be at least 2", args.global_k));
     }
+    if !(1..=MAX_LIGHT_SAMPLES).contains(&args.light_samples) {
+        return invalid(format!(
+            "--light-samples {}: must be from 1 to {MAX_LIGHT_SAMPLES}",
+            args.light_samples
+        ));
+    }
+    if args.irradiance_stride > MAX_IRRADIANCE_STRIDE {
+        return invalid(format!(
+            "--irradiance-stride {}: must be from 0 (off) to {MAX_IRRADIANCE_STRIDE}",
+            args.irradiance_stride
+        ));
+    }
     if args.passes == Some(0) {
         return invalid("--passes 0: at least one pass".into());
     }
@@ -338,6 +368,11 @@ pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
     pool.install(|| run_in_pool(args, output))
 }
 
+/// Most shadow rays per area light a diffuse hit may take (more is a typo, not a setting).
+pub const MAX_LIGHT_SAMPLES: u32 = 4096;
+/// Largest `--irradiance-stride`: beyond it the table is too sparse to stand for the map.
+pub const MAX_IRRADIANCE_STRIDE: usize = 1 << 16;
+
 /// Passes per render by default: chosen by measurement (README, "Choosing the defaults").
 pub const DEFAULT_PASSES: u64 = 8;
 /// Stored caustic photons per pass by default.
@@ -382,6 +417,8 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         max_depth: args.max_depth,
         final_gather: args.final_gather,
         global_k: args.global_k,
+        irradiance_stride: args.irradiance_stride,
+        light_samples: args.light_samples,
         alpha: args.ppm_alpha,
         estimator: args.estimate.settings(),
     }

@@ -92,6 +92,7 @@ impl SceneTarget {
             caustics,
             indirect: Indirect::None,
             max_depth: MAX_DEPTH,
+            light_samples: 1,
         };
         // Pass 0's pixel positions for every image: a progressive reference then converges to
         // the image at exactly the points every sweep run samples.

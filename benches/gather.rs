@@ -1,0 +1,182 @@
+//! The cost of what one final-gather ray reads where it lands: the nearest agreeing point of
+//! the precomputed irradiance table (`--irradiance-stride 4`, the integrator's lookup with its
+//! fallback to the full estimate) against one k-NN global estimate (constant kernel,
+//! k = `--global-k`'s default 100, as pass 0 runs it: no cap), on the Cornell box's global map
+//! of 200,000 stored photons (direct ones included, as final gathering traces it). The table's
+//! precompute, the per-pass phase it adds, is timed too (on every thread).
+//!
+//! Queries are the photons of a second, independently traced map (their positions and normals):
+//! points on the box's surfaces where light lands, visited in a shuffled order as gather rays
+//! visit them. A batch of queries runs on one thread, so the per-query figures are the cost on
+//! one core. The summary at the end gives the medians of the 10 samples and their ratio.
+//!
+//! `cargo bench --bench gather` (about a minute).
+
+mod support;
+
+use criterion::{Bencher, Criterion, SamplingMode, Throughput, criterion_group, criterion_main};
+use dpm::estimate::precomputed::DEFAULT_STRIDE;
+use dpm::estimate::settings::k_equivalent_radius;
+use dpm::estimate::{
+    KnnEstimate, PrecomputedIrradiance, Query, RadialKernel, RadianceEstimate, Scratch,
+};
+use dpm::photon::PhotonMap;
+use dpm::photon::tracer::{MapKind, trace_map};
+use dpm::world::World;
+use indicatif::ProgressBar;
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::{Duration, Instant};
+use support::Rng;
+
+const PHOTONS: usize = 200_000;
+const GLOBAL_K: usize = 100;
+const QUERIES: usize = 4096;
+const SAMPLES: usize = 10;
+
+fn cornell_global_map(world: &World, seed: u64) -> PhotonMap {
+    let kind = MapKind::Global { with_direct: true };
+    trace_map(world, kind, PHOTONS, seed, &ProgressBar::hidden()).0
+}
+
+/// Per-iteration seconds of every call criterion makes (flat sampling: the last [`SAMPLES`]
+/// are the measured ones).
+#[derive(Default)]
+struct Samples(RefCell<BTreeMap<&'static str, Vec<f64>>>);
+
+impl Samples {
+    fn time(&self, b: &mut Bencher, key: &'static str, mut f: impl FnMut() -> f32) {
+        b.iter_custom(|iters| {
+            let start = Instant::now();
+            for _ in 0..iters {
+                std::hint::black_box(f());
+            }
+            let elapsed = start.elapsed();
+            self.0
+                .borrow_mut()
+                .entry(key)
+                .or_default()
+                .push(elapsed.as_secs_f64() / iters as f64);
+            elapsed
+        });
+    }
+
+    fn median(&self, key: &str) -> f64 {
+        let all = self.0.borrow();
+        let v = &all[key];
+        let mut last = v[v.len().saturating_sub(SAMPLES)..].to_vec();
+        last.sort_by(f64::total_cmp);
+        let n = last.len();
+        if n % 2 == 1 {
+            last[n / 2]
+        } else {
+            0.5 * (last[n / 2 - 1] + last[n / 2])
+        }
+    }
+}
+
+fn gather(c: &mut Criterion) {
+    dpm::embree::enable_flush_to_zero();
+    let description = dpm::scene::load(Path::new("scenes/cornell-box.toml")).expect("scene");
+    let world = World::new(description).expect("Embree world");
+    let map = cornell_global_map(&world, 1);
+    let others = cornell_global_map(&world, 2);
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let queries: Vec<Query> = (0..QUERIES)
+        .map(|_| {
+            let slot =
+                ((rng.unit() as f64 * others.len() as f64) as u32).min(others.len() as u32 - 1);
+            let p = others.photon(slot);
+            Query {
+                position: p.position(),
+                normal: p.normal(),
+            }
+        })
+        .collect();
+    let reach = k_equivalent_radius(&map, GLOBAL_K);
+    let estimate = KnnEstimate::new(RadialKernel::Constant, GLOBAL_K, None);
+    let samples = Samples::default();
+
+    let mut group = c.benchmark_group("gather");
+    group
+        .sample_size(SAMPLES)
+        .sampling_mode(SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    group.throughput(Throughput::Elements(1));
+    group.bench_function("precompute_table", |b| {
+        samples.time(b, "precompute", || {
+            let table = PrecomputedIrradiance::build(
+                &map,
+                &estimate,
+                DEFAULT_STRIDE,
+                reach,
+                &ProgressBar::hidden(),
+            );
+            table.len() as f32
+        })
+    });
+    let table = PrecomputedIrradiance::build(
+        &map,
+        &estimate,
+        DEFAULT_STRIDE,
+        reach,
+        &ProgressBar::hidden(),
+    );
+    let mut fallbacks = 0;
+    let mut scratch = Scratch::default();
+    for q in &queries {
+        if table.lookup(q, &mut scratch).is_none() {
+            fallbacks += 1;
+        }
+    }
+    group.throughput(Throughput::Elements(QUERIES as u64));
+    let scratch = RefCell::new(Scratch::default());
+    group.bench_function("knn_estimate_k100", |b| {
+        samples.time(b, "estimate", || {
+            let s = &mut scratch.borrow_mut();
+            queries
+                .iter()
+                .map(|q| estimate.irradiance(&map, q, s).x)
+                .sum()
+        })
+    });
+    group.bench_function("precomputed_lookup", |b| {
+        samples.time(b, "lookup", || {
+            let s = &mut scratch.borrow_mut();
+            queries
+                .iter()
+                .map(|q| {
+                    table
+                        .lookup(q, s)
+                        .unwrap_or_else(|| estimate.irradiance(&map, q, s))
+                        .x
+                })
+                .sum()
+        })
+    });
+    group.finish();
+
+    let per_query = |key| samples.median(key) / QUERIES as f64 * 1e9;
+    let (e, l) = (per_query("estimate"), per_query("lookup"));
+    println!(
+        "\nCornell box global map, {} photons; table of one photon in {DEFAULT_STRIDE}: {} points, \
+         {} heap bytes; {fallbacks} of {QUERIES} lookups fell back to the estimate",
+        map.len(),
+        table.len(),
+        table.heap_bytes()
+    );
+    println!("  k-NN estimate (k = {GLOBAL_K}): {e:.0} ns per query (median)");
+    println!(
+        "  precomputed lookup:        {l:.0} ns per query (median), {:.3} of the estimate",
+        l / e
+    );
+    println!(
+        "  precompute (all threads):  {:.1} ms per pass",
+        samples.median("precompute") * 1e3
+    );
+}
+
+criterion_group!(benches, gather);
+criterion_main!(benches);
