@@ -45,7 +45,7 @@ const CHUNK: usize = 1024;
 
 /// Whether the photon traced `source`-th is one of the table's (one in `stride`).
 fn chosen(source: u32, stride: usize) -> bool {
-    stride == 1 || crate::sampling::mix(0x7AB1_E000, source as u64) % stride as u64 == 0
+    stride == 1 || crate::sampling::mix(0x7AB1_E000, source as u64).is_multiple_of(stride as u64)
 }
 
 /// Irradiance precomputed at a subset of a photon map's photons.

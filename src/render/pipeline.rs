@@ -335,10 +335,10 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
         );
     }
     for (flag, path) in [("--film", &args.film), ("--resume", &args.resume)] {
-        if let Some(p) = path {
-            if p == &output {
-                return invalid(format!("{flag} {}: is also the output image", p.display()));
-            }
+        if let Some(p) = path
+            && p == &output
+        {
+            return invalid(format!("{flag} {}: is also the output image", p.display()));
         }
     }
     for (flag, path) in [("--resume", &args.resume), ("--reference", &args.reference)] {
@@ -346,16 +346,16 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
             return invalid(format!("{flag} {}: does not exist", p.display()));
         }
     }
-    if let Some(p) = &args.reference {
-        if !matches!(
+    if let Some(p) = &args.reference
+        && !matches!(
             ImageFormat::from_path(p)?,
             ImageFormat::Pfm | ImageFormat::Exr
-        ) {
-            return invalid(format!(
-                "--reference {}: must be a .pfm or .exr image",
-                p.display()
-            ));
-        }
+        )
+    {
+        return invalid(format!(
+            "--reference {}: must be a .pfm or .exr image",
+            p.display()
+        ));
     }
     validate_photon_files(args, &output)?;
     Ok(output)
@@ -526,11 +526,11 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
             interrupted = true;
             break;
         }
-        if pass == 0 {
-            if let Some(path) = &args.save_photons {
-                save_maps(path, scene_hash, args.seed, &wanted, &maps, &mut times)?;
-                saved_photons = Some(path.clone());
-            }
+        if pass == 0
+            && let Some(path) = &args.save_photons
+        {
+            save_maps(path, scene_hash, args.seed, &wanted, &maps, &mut times)?;
+            saved_photons = Some(path.clone());
         }
         // Pass 0's maps resolve the base radii; later passes only scale them.
         let radii = match radii {
