@@ -504,7 +504,7 @@ fn a_default_render_is_eight_progressive_passes() {
     );
     let o = pipeline::run(&args).expect("render");
     assert_eq!(o.film.passes().ranges(), &[(0, 8)]);
-    assert_eq!(o.film.header.settings.global_photons, 50_000);
+    assert_eq!(o.film.header.settings.global_photons, 200_000);
     assert_eq!(o.caustic.map(|c| c.stored), Some(100_000));
 }
 

@@ -94,6 +94,9 @@ pub struct Integrator<'a> {
     /// Shadow rays per area light (sphere or quad) at each diffuse eye hit; a point light
     /// takes one.
     pub light_samples: u32,
+    /// Glass hits at depth below this follow both rays; deeper ones follow one, chosen with
+    /// the Fresnel reflectance as probability (the same expectation, fewer rays).
+    pub glass_split_depth: u32,
 }
 
 /// Specular bounces a gather ray follows before giving up.
@@ -157,6 +160,22 @@ impl Integrator<'_> {
                 let eta = if entering { 1.0 / ior } else { *ior };
                 let f = fresnel_dielectric(-dir.dot(ns), eta);
                 let r = reflect(dir, ns);
+                if depth >= self.glass_split_depth {
+                    // One ray: reflection with probability F (always under total internal
+                    // reflection), else refraction, each with weight 1.
+                    let refracted = refract(dir, ns, eta).filter(|_| f < 1.0);
+                    let next = match refracted {
+                        Some(t) if sampler.rng.next_f32() >= f => t,
+                        _ => r,
+                    };
+                    return self.radiance(
+                        self.spawn(hit.position, ng, next),
+                        next,
+                        depth + 1,
+                        sampler,
+                        scratch,
+                    );
+                }
                 let mut l = f * self.radiance(
                     self.spawn(hit.position, ng, r),
                     r,

@@ -58,9 +58,18 @@ pub struct RenderSettings {
     pub irradiance_stride: usize,
     /// Shadow rays per area light at each diffuse eye hit.
     pub light_samples: u32,
+    /// Glass hits below this depth follow both the reflected and the refracted ray; deeper
+    /// ones follow one, chosen by the Fresnel reflectance.
+    #[serde(default = "split_everywhere")]
+    pub glass_split_depth: u32,
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
     pub estimator: EstimatorSettings,
+}
+
+/// Films written before `glass-split-depth` existed split at every glass hit.
+fn split_everywhere() -> u32 {
+    u32::MAX
 }
 
 /// The radii pass 0 resolves and every later pass scales.
@@ -304,6 +313,7 @@ impl PassContext<'_> {
             },
             max_depth: self.settings.max_depth,
             light_samples: self.settings.light_samples,
+            glass_split_depth: self.settings.glass_split_depth,
         };
         let probe = match (&caustic, &diffusion) {
             (Some((map, _)), Some(d)) if self.kernel_field => Some(KernelProbe {

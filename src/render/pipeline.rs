@@ -116,7 +116,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = DEFAULT_CAUSTIC_PHOTONS, allow_negative_numbers = true)]
     pub caustic_photons: usize,
 
-    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 50000 when
+    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 200000 when
     /// the scene has two or more diffuse objects (so diffuse light can bounce between them),
     /// else 0 (no global map: a lone plane cannot light itself).
     #[arg(long, allow_negative_numbers = true)]
@@ -149,6 +149,14 @@ pub struct RenderArgs {
         allow_negative_numbers = true
     )]
     pub light_samples: u32,
+
+    /// Glass hits along an eye path that follow both the reflected and the refracted ray
+    /// (weighted by the Fresnel reflectance); past them a path follows one, chosen with that
+    /// probability. Splitting every hit costs up to 2^depth rays a pixel through thick glass
+    /// for detail a few more passes average in anyway; 0 is pure sampling, 1000 splits every
+    /// hit (the Whitted tracer).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_GLASS_SPLIT_DEPTH)]
+    pub glass_split_depth: u32,
 
     /// Caustic radiance estimate.
     #[command(flatten)]
@@ -378,7 +386,9 @@ pub const DEFAULT_PASSES: u64 = 8;
 /// Stored caustic photons per pass by default.
 pub const DEFAULT_CAUSTIC_PHOTONS: usize = 100_000;
 /// Stored global photons per pass by default (scenes with two or more diffuse objects).
-pub const DEFAULT_GLOBAL_PHOTONS: usize = 50_000;
+pub const DEFAULT_GLOBAL_PHOTONS: usize = 200_000;
+/// Glass hits that split an eye path by default (README, "Whole scenes").
+pub const DEFAULT_GLASS_SPLIT_DEPTH: u32 = 1000;
 
 /// The passes asked for: --passes, else one for a photon-map file's single pass, else the
 /// default (with --time and no --passes the budget decides instead).
@@ -419,6 +429,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         global_k: args.global_k,
         irradiance_stride: args.irradiance_stride,
         light_samples: args.light_samples,
+        glass_split_depth: args.glass_split_depth,
         alpha: args.ppm_alpha,
         estimator: args.estimate.settings(),
     }

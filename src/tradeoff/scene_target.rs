@@ -93,6 +93,7 @@ impl SceneTarget {
             indirect: Indirect::None,
             max_depth: MAX_DEPTH,
             light_samples: 1,
+            glass_split_depth: u32::MAX,
         };
         // Pass 0's pixel positions for every image: a progressive reference then converges to
         // the image at exactly the points every sweep run samples.
