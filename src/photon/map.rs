@@ -161,7 +161,25 @@ pub struct GradientField {
     /// The sites of leaf `j` are `leaf_sites[j]..leaf_sites[j + 1]`.
     leaf_sites: Vec<u32>,
     leaf_normals: Vec<Option<Vec3>>,
+    /// Per leaf, the moments of its channel sums about its box's centre.
+    leaf_moments: Vec<LeafMoments>,
     photons: usize,
+}
+
+/// A leaf's tight box and the moments of its photons' channel sums `φ` (in the field's scaled
+/// units) about the box's centre `c`, with `u = x − c`: enough to add the Epanechnikov sums
+/// `Σ (1 − d²/r²) φ` and `Σ (1 − d²/r²) φ²` of a leaf that lies wholly inside a disc at once,
+/// since `d² = |u|² + 2 u·(c − q) + |c − q|²`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LeafMoments {
+    pub lower: Vec3,
+    pub upper: Vec3,
+    pub centre: Vec3,
+    pub count: u32,
+    /// `Σ φ`, `Σ φ u`, `Σ φ |u|²`.
+    pub phi: (f64, glam::DVec3, f64),
+    /// `Σ φ²`, `Σ φ² u`, `Σ φ² |u|²`.
+    pub phi2: (f64, glam::DVec3, f64),
 }
 
 /// A leaf's sites for a scan: position, gradient and weight columns.
@@ -260,6 +278,38 @@ impl GradientField {
             }
             field.leaf_sites.push(field.site_slot.len() as u32);
         }
+        let channel = &field.channel_sum;
+        field.leaf_moments = (tree.leaf_base()..tree.node_end())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|leaf| {
+                let slots = tree.node_slots(leaf);
+                let (mut lower, mut upper) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+                for s in slots.clone() {
+                    lower = lower.min(tree.point(s));
+                    upper = upper.max(tree.point(s));
+                }
+                let centre = (lower + upper) * 0.5;
+                let mut m = LeafMoments {
+                    lower,
+                    upper,
+                    centre,
+                    count: slots.len() as u32,
+                    ..LeafMoments::default()
+                };
+                for s in slots {
+                    let u = (tree.point(s) - centre).as_dvec3();
+                    let (p, u2) = (channel[s] as f64, u.length_squared());
+                    m.phi.0 += p;
+                    m.phi.1 += u * p;
+                    m.phi.2 += u2 * p;
+                    m.phi2.0 += p * p;
+                    m.phi2.1 += u * (p * p);
+                    m.phi2.2 += u2 * p * p;
+                }
+                m
+            })
+            .collect();
         field.leaf_normals = (tree.leaf_base()..tree.node_end())
             .into_par_iter()
             .with_min_len(256)
@@ -361,6 +411,11 @@ impl GradientField {
         let s = slot as usize;
         Vec3::new(self.power[0][s], self.power[1][s], self.power[2][s])
     }
+    /// The box and channel-sum moments of leaf `leaf` (counted from the first leaf).
+    #[inline]
+    pub fn leaf_moments(&self, leaf: usize) -> &LeafMoments {
+        &self.leaf_moments[leaf]
+    }
     /// The normal every photon of leaf `leaf` (counted from the first leaf) shares, if any.
     #[inline]
     pub fn leaf_normal(&self, leaf: usize) -> Option<Vec3> {
@@ -377,6 +432,7 @@ impl GradientField {
         (floats + self.site_weight.capacity() + self.channel_sum.capacity()) * size_of::<f32>()
             + (self.site_slot.capacity() + self.leaf_sites.capacity()) * size_of::<u32>()
             + self.leaf_normals.capacity() * size_of::<Option<Vec3>>()
+            + self.leaf_moments.capacity() * size_of::<LeafMoments>()
     }
 }
 

@@ -353,9 +353,59 @@ impl AnalysisSums {
         let sites = field.leaf_site_range(run.leaves.start).start
             ..field.leaf_site_range(run.leaves.end - 1).end;
         self.scan_sites(field, q, sites, radii);
+        // Leaves wholly inside the disc add their moments; the others are scanned, runs of
+        // neighbouring ones together.
+        let mut pending: Option<std::ops::Range<usize>> = None;
+        let mut slot = run.slots.start;
+        for leaf in run.leaves.clone() {
+            let m = field.leaf_moments(leaf);
+            let slots = slot..slot + m.count as usize;
+            slot = slots.end;
+            let far = (q - m.lower).abs().max((m.upper - q).abs());
+            if far.length_squared() < radii.r2 * INSIDE_MARGIN {
+                self.add_moments(m, q, radii);
+                continue;
+            }
+            pending = match pending {
+                Some(p) if p.end == slots.start => Some(p.start..slots.end),
+                Some(p) => {
+                    self.scan_isotropic(tree, field, q, p, radii);
+                    Some(slots)
+                }
+                None => Some(slots),
+            };
+        }
+        if let Some(p) = pending {
+            self.scan_isotropic(tree, field, q, p, radii);
+        }
+    }
+
+    /// Adds a leaf that lies wholly within `r` of `q` to the isotropic sums from its moments.
+    #[inline]
+    fn add_moments(&mut self, m: &crate::photon::map::LeafMoments, q: Vec3, radii: &ScanRadii) {
+        // 1 − d²/r² with d² = |u|² + 2 u·e + |e|², e = c − q.
+        let e = (m.centre - q).as_dvec3();
+        let inv_r2 = 1.0 / radii.r2 as f64;
+        let base = 1.0 - e.length_squared() * inv_r2;
+        let sum =
+            |(s0, s1, s2): (f64, glam::DVec3, f64)| s0 * base - (2.0 * e.dot(s1) + s2) * inv_r2;
+        self.isotropic += sum(m.phi);
+        self.second_moment += sum(m.phi2);
+        self.inside += m.count as f64;
+    }
+
+    /// The isotropic sums over the photons of `slots` within `r`, four lanes at a time.
+    #[inline]
+    fn scan_isotropic(
+        &mut self,
+        tree: &crate::photon::KdTree,
+        field: &GradientField,
+        q: Vec3,
+        slots: std::ops::Range<usize>,
+        radii: &ScanRadii,
+    ) {
         let (xs, ys, zs) = tree.coordinates();
         let phi = field.channel_sums();
-        let slots = run.slots.clone();
         let Some(end) = lane_end(&slots, xs.len()) else {
             for s in slots {
                 self.add_isotropic((tree.point(s) - q).length_squared(), phi[s], radii);
@@ -536,6 +586,10 @@ fn total(a: [f32; LANES]) -> f64 {
     ((a[0] + a[1]) + (a[2] + a[3])) as f64
 }
 
+/// A leaf is wholly inside a disc when its box's far corner is inside by this relative margin
+/// (so that no photon rounds to the rim's other side).
+const INSIDE_MARGIN: f32 = 1.0 - 1e-5;
+
 /// Lanes of the leaf scans: four f32, one SSE register.
 const LANES: usize = 4;
 
@@ -614,7 +668,7 @@ impl RadianceEstimate for DiffusionEstimate {
                 let scan = EllipseScan::new(&metric, query.position);
                 let mut s = DVec3::ZERO;
                 for run in &scratch.kernel_runs {
-                    s += scan.sum(map.tree(), field, run.slots.clone());
+                    s += scan.run(map.tree(), field, run);
                 }
                 s * (2.0 / std::f64::consts::PI)
             }
@@ -651,6 +705,46 @@ impl EllipseScan {
             a: metric.axes().map(|a| a.as_vec3()),
             q,
         }
+    }
+
+    /// `Σ (1 − y) Φ` over a run of leaves, skipping the leaves whose box lies outside the
+    /// ellipsoid's bounding slab on some axis (most of them where the kernel is squeezed),
+    /// scanning the others, runs of neighbouring ones together.
+    fn run(&self, tree: &crate::photon::KdTree, field: &GradientField, run: &LeafRun) -> DVec3 {
+        let mut sum = DVec3::ZERO;
+        let mut pending: Option<std::ops::Range<usize>> = None;
+        let mut slot = run.slots.start;
+        for leaf in run.leaves.clone() {
+            let m = field.leaf_moments(leaf);
+            let slots = slot..slot + m.count as usize;
+            slot = slots.end;
+            if self.misses(m.lower, m.upper) {
+                continue;
+            }
+            pending = match pending {
+                Some(p) if p.end == slots.start => Some(p.start..slots.end),
+                Some(p) => {
+                    sum += self.sum(tree, field, p);
+                    Some(slots)
+                }
+                None => Some(slots),
+            };
+        }
+        if let Some(p) = pending {
+            sum += self.sum(tree, field, p);
+        }
+        sum
+    }
+
+    /// Whether the box misses the ellipsoid: on some axis `a_i` the box's projection lies
+    /// wholly outside [−1, 1] (with a margin on the safe side, so no photon inside is lost).
+    #[inline]
+    fn misses(&self, lower: Vec3, upper: Vec3) -> bool {
+        let centre = (lower + upper) * 0.5 - self.q;
+        let half = (upper - lower) * 0.5;
+        self.a
+            .iter()
+            .any(|a| centre.dot(*a).abs() - half.dot(a.abs()) > 1.0 + 1e-4)
     }
 
     /// `Σ (1 − y) Φ` over the run's photons with `y = dᵀD⁻¹d/r² < 1`, four lanes at a time.
