@@ -5,9 +5,10 @@
 //! the photon beside it as [`PhotonAttributes`] (8 bytes), the tree adds its source index (4)
 //! and split planes (~0.3): about 24.3 bytes per photon. The [`GradientField`], while a
 //! diffusion estimate reads the map, adds 16 per photon (the decoded power and the channel
-//! sum as f32 arrays in slot order, which the estimate's leaf scans stream through) and 32
-//! per gradient site (every photon, except where sites are thinned): at most 72.3
-//! ([`PhotonMap::bytes_per_photon`]).
+//! sum as f32 arrays in slot order, which the estimate's leaf scans stream through), 32 per
+//! gradient site (every photon, except where sites are thinned) and 136 per leaf of 10–20
+//! photons (its box, channel-sum moments and shared normal): at most about 90 in all
+//! ([`PhotonMap::bytes_per_photon`]), freed with the pass's map.
 
 use super::{KdTree, Photon, PhotonAttributes};
 use glam::Vec3;
@@ -441,7 +442,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_map_holds_at_most_74_bytes_per_photon_with_its_gradient_field() {
+    fn a_map_holds_at_most_90_bytes_per_photon_with_its_gradient_field() {
         let photons: Vec<Photon> = (0..10_000)
             .map(|i| {
                 let t = i as f32 * 0.618;
@@ -458,7 +459,7 @@ mod tests {
         map.set_gradients(&vec![Vec3::X; map.len()], 1.0);
         let with = map.bytes_per_photon();
         assert!(
-            bare < 25.0 && with <= 74.0 && with - bare >= 48.0,
+            bare < 25.0 && with <= 90.0 && with - bare >= 48.0,
             "{bare} {with}"
         );
         let mut got: Vec<Photon> = map.photons().collect();
