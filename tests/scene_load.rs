@@ -106,6 +106,7 @@ fn every_scene_in_scenes_loads() {
         loaded,
         [
             "cornell-box.toml",
+            "cornell-point.toml",
             "metal-ring.toml",
             "point-plane.toml",
             "torus-knot.toml"
