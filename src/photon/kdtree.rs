@@ -245,19 +245,8 @@ impl KdTree {
 
     /// [`KdTree::descend`] with the children in slot order instead of near first.
     fn descend_in_order<S: Search>(&self, node: usize, offsets: &mut [f32; 3], search: &mut S) {
-        let leaf_base = 1usize << self.depth;
-        if node >= leaf_base {
-            let leaf = (node - leaf_base) as u64;
-            let n = self.len() as u64;
-            let first = ((leaf * n) >> self.depth) as usize;
-            let end = (((leaf + 1) * n) >> self.depth) as usize;
-            search.scan(Leaf {
-                xs: &self.xs[first..end],
-                ys: &self.ys[first..end],
-                zs: &self.zs[first..end],
-                first_slot: first as u32,
-                index: node - leaf_base,
-            });
+        if node >= self.leaf_base() {
+            search.scan(self.leaf(node));
             return;
         }
         let axis = usize::from(self.axes[node]);
@@ -285,23 +274,27 @@ impl KdTree {
         (offsets, cell_dist2(&offsets))
     }
 
+    /// The points of leaf `node` (a node number from [`KdTree::leaf_base`] on).
+    #[inline(always)]
+    fn leaf(&self, node: usize) -> Leaf<'_> {
+        let leaf = (node - self.leaf_base()) as u64;
+        let n = self.len() as u64;
+        let first = ((leaf * n) >> self.depth) as usize;
+        let end = (((leaf + 1) * n) >> self.depth) as usize;
+        Leaf {
+            xs: &self.xs[first..end],
+            ys: &self.ys[first..end],
+            zs: &self.zs[first..end],
+            first_slot: first as u32,
+            index: node - self.leaf_base(),
+        }
+    }
+
     /// Visits the subtree of `node`, near child first; `offsets` holds, per axis, the distance
     /// from the query to the node's cell (restored on return).
     fn descend<S: Search>(&self, node: usize, offsets: &mut [f32; 3], search: &mut S) {
-        let leaf_base = 1usize << self.depth;
-        if node >= leaf_base {
-            let leaf = (node - leaf_base) as u64;
-            let n = self.len() as u64;
-            let first = ((leaf * n) >> self.depth) as usize;
-            let end = (((leaf + 1) * n) >> self.depth) as usize;
-            let leaf = Leaf {
-                xs: &self.xs[first..end],
-                ys: &self.ys[first..end],
-                zs: &self.zs[first..end],
-                first_slot: first as u32,
-                index: node - leaf_base,
-            };
-            search.scan(leaf);
+        if node >= self.leaf_base() {
+            search.scan(self.leaf(node));
             return;
         }
         let axis = usize::from(self.axes[node]);

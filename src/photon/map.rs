@@ -167,6 +167,25 @@ pub struct GradientField {
     photons: usize,
 }
 
+/// The normal every photon of each leaf shares (leaves in order from the first), if they
+/// share one: a scan of a one-surface leaf tests the normal once.
+pub fn leaf_normals(map: &PhotonMap) -> Vec<Option<Vec3>> {
+    let tree = map.tree();
+    (tree.leaf_base()..tree.node_end())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|leaf| {
+            let mut codes = tree
+                .node_slots(leaf)
+                .map(|s| map.attributes(s as u32).normal_code());
+            let first = codes.next()?;
+            codes
+                .all(|c| c == first)
+                .then(|| super::record::decode_octahedral(first.to_be_bytes()))
+        })
+        .collect()
+}
+
 /// A leaf's tight box and the moments of its photons' channel sums `φ` (in the field's scaled
 /// units) about the box's centre `c`, with `u = x − c`: enough to add the Epanechnikov sums
 /// `Σ (1 − d²/r²) φ` and `Σ (1 − d²/r²) φ²` of a leaf that lies wholly inside a disc at once,
@@ -311,19 +330,7 @@ impl GradientField {
                 m
             })
             .collect();
-        field.leaf_normals = (tree.leaf_base()..tree.node_end())
-            .into_par_iter()
-            .with_min_len(256)
-            .map(|leaf| {
-                let mut codes = tree
-                    .node_slots(leaf)
-                    .map(|s| map.attributes(s as u32).normal_code());
-                let first = codes.next()?;
-                codes
-                    .all(|c| c == first)
-                    .then(|| super::record::decode_octahedral(first.to_be_bytes()))
-            })
-            .collect();
+        field.leaf_normals = leaf_normals(map);
         field
     }
     pub fn len(&self) -> usize {

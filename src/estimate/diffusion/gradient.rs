@@ -287,19 +287,7 @@ impl<'a> NodeSums<'a> {
             .with_min_len(4096)
             .map(|s| channel_sum(map.attributes(s)))
             .collect();
-        let leaf_normals = (leaf_base..end)
-            .into_par_iter()
-            .with_min_len(256)
-            .map(|leaf| {
-                let mut codes = tree
-                    .node_slots(leaf)
-                    .map(|s| map.attributes(s as u32).normal_code());
-                let first = codes.next()?;
-                codes
-                    .all(|c| c == first)
-                    .then(|| crate::photon::record::decode_octahedral(first.to_be_bytes()))
-            })
-            .collect();
+        let leaf_normals = crate::photon::map::leaf_normals(map);
         Self {
             tree,
             nodes,
