@@ -105,25 +105,19 @@ fn gather(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(3));
     group.throughput(Throughput::Elements(1));
+    let build = || {
+        PrecomputedIrradiance::build(
+            &map,
+            &estimate,
+            DEFAULT_STRIDE,
+            reach,
+            &ProgressBar::hidden(),
+        )
+    };
     group.bench_function("precompute_table", |b| {
-        samples.time(b, "precompute", || {
-            let table = PrecomputedIrradiance::build(
-                &map,
-                &estimate,
-                DEFAULT_STRIDE,
-                reach,
-                &ProgressBar::hidden(),
-            );
-            table.len() as f32
-        })
+        samples.time(b, "precompute", || build().len() as f32)
     });
-    let table = PrecomputedIrradiance::build(
-        &map,
-        &estimate,
-        DEFAULT_STRIDE,
-        reach,
-        &ProgressBar::hidden(),
-    );
+    let table = build();
     let mut fallbacks = 0;
     let mut scratch = Scratch::default();
     for q in &queries {

@@ -202,13 +202,9 @@ impl KdTree {
     /// Calls `f(slot, dist2)` for every point with squared distance `<= radius2`, in no
     /// particular order. A non-finite query or a NaN radius finds nothing.
     pub fn for_each_within(&self, query: Vec3, radius2: f32, f: impl FnMut(u32, f32)) {
-        if !query.is_finite() || radius2.is_nan() || radius2 < 0.0 || self.is_empty() {
+        let Some(mut offsets) = self.radius_search_start(query, radius2) else {
             return;
-        }
-        let (mut offsets, root_dist2) = self.root_offsets(query);
-        if root_dist2 > radius2 {
-            return;
-        }
+        };
         let mut search = WithinRadius {
             query,
             radius2,
@@ -228,13 +224,9 @@ impl KdTree {
         radius2: f32,
         f: impl FnMut(usize, std::ops::Range<usize>),
     ) {
-        if !query.is_finite() || radius2.is_nan() || radius2 < 0.0 || self.is_empty() {
+        let Some(mut offsets) = self.radius_search_start(query, radius2) else {
             return;
-        }
-        let (mut offsets, root_dist2) = self.root_offsets(query);
-        if root_dist2 > radius2 {
-            return;
-        }
+        };
         let mut search = LeavesWithin {
             query,
             radius2,
@@ -264,6 +256,17 @@ impl KdTree {
             }
             offsets[axis] = saved;
         }
+    }
+
+    /// The root cell's offsets for a radius search, or `None` where it finds nothing (a
+    /// non-finite query, a NaN or negative radius, an empty tree, a query beyond the radius
+    /// of the root cell).
+    fn radius_search_start(&self, query: Vec3, radius2: f32) -> Option<[f32; 3]> {
+        if !query.is_finite() || radius2.is_nan() || radius2 < 0.0 || self.is_empty() {
+            return None;
+        }
+        let (offsets, root_dist2) = self.root_offsets(query);
+        (root_dist2 <= radius2).then_some(offsets)
     }
 
     /// Per-axis offsets from `query` to the root cell and their squared length.
