@@ -554,6 +554,7 @@ fn error_display_is_file_line_field_message() {
     let e = SceneError {
         file: PathBuf::from("scenes/x.toml"),
         line: Some(12),
+        column: None,
         field: "objects[2].radius".into(),
         message: "-1 must be a finite number greater than 0".into(),
     };

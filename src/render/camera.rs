@@ -9,7 +9,7 @@
 //! Owns sample placement; must not shade or accumulate.
 
 use crate::sampling::{EyeSequence, Rng, SOBOL_BLOCK, Stream, StreamSeed, pass_seed};
-use crate::scene::Camera;
+use crate::scene::{Camera, Handedness};
 use glam::Vec3;
 
 /// Primary rays of a pinhole camera.
@@ -27,8 +27,12 @@ pub struct PinholeCamera {
 impl PinholeCamera {
     pub fn new(c: &Camera) -> Self {
         let forward = (c.look_at - c.position).normalize();
-        let right = forward.cross(c.up).normalize();
-        let up = right.cross(forward);
+        let right_handed = forward.cross(c.up).normalize();
+        let up = right_handed.cross(forward);
+        let right = match c.handedness {
+            Handedness::Right => right_handed,
+            Handedness::Left => -right_handed,
+        };
         Self {
             origin: c.position,
             forward,

@@ -33,8 +33,14 @@ use std::time::{Duration, Instant};
 
 #[derive(Clone, Debug, clap::Args)]
 pub struct RenderArgs {
-    /// Scene file (TOML; see docs/scene-format.md).
+    /// Scene file: dpm's TOML, or a pbrt-v3/v4 scene by the `.pbrt` extension (see
+    /// docs/scene-format.md).
     pub scene: PathBuf,
+
+    /// Refuse a pbrt material dpm can only approximate (uber, plastic, rough metals, ...)
+    /// instead of rendering its diffuse part with a warning.
+    #[arg(long)]
+    pub strict: bool,
 
     /// Output image; the format follows the extension: .png (tone-mapped sRGB), .exr (linear
     /// float RGB, with direct, caustic and indirect layers and, with the diffusion estimate,
@@ -439,8 +445,12 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     embree::enable_flush_to_zero();
     let run_start = Instant::now();
     let mut times = PhaseTimes::new();
-    let (description, report) =
-        times.time("load scene", || scene::load_with_report(&args.scene))?;
+    let (description, report) = times.time("load scene", || {
+        let options = scene::LoadOptions {
+            strict: args.strict,
+        };
+        scene::load_with_options(&args.scene, &options)
+    })?;
     report_load(args, &report, &mut times);
     let scene_hash = store::scene_fingerprint(&description);
     let world = times.time("build Embree scene", || World::new(description))?;
@@ -715,6 +725,9 @@ pub fn relative_mse(image: &Image, reference: &Image) -> f64 {
 fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseTimes) {
     for warning in &report.warnings {
         eprintln!("warning: {}: {warning}", args.scene.display());
+    }
+    for note in &report.notes {
+        eprintln!("note: {note}");
     }
     if report.degenerate_triangles_dropped > 0 {
         let dropped = report.degenerate_triangles_dropped as u64;

@@ -119,6 +119,7 @@ impl<'t> Document<'t> {
         SceneError {
             file: self.file.clone(),
             line: Some(self.line_of(self.offset_of(path))),
+            column: None,
             field: path.to_string(),
             message: message.into(),
         }
@@ -154,6 +155,7 @@ impl<'t> Document<'t> {
         SceneError {
             file: self.file.clone(),
             line: Some(self.line_of(span.start)),
+            column: None,
             field: display_path(&path),
             message,
         }
@@ -175,6 +177,7 @@ impl<'t> Document<'t> {
         SceneError {
             file: self.file.clone(),
             line: Some(self.line_of(span.start)),
+            column: None,
             field: display_path(&path),
             message: format!("TOML syntax error: {}", err.message()),
         }

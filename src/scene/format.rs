@@ -34,6 +34,17 @@ pub(crate) struct CameraSpec {
     pub fov_y: f32,
     /// [width, height] in pixels.
     pub resolution: [u32; 2],
+    /// `"right"` (default) or `"left"` (pbrt's camera).
+    #[serde(default)]
+    pub handedness: HandednessSpec,
+}
+
+#[derive(Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum HandednessSpec {
+    #[default]
+    Right,
+    Left,
 }
 
 pub(crate) enum LightSpec {

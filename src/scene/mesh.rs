@@ -249,7 +249,7 @@ impl MeshGroup {
     }
 }
 
-fn has_zero_area(positions: &[Vec3], [a, b, c]: [u32; 3]) -> bool {
+pub(crate) fn has_zero_area(positions: &[Vec3], [a, b, c]: [u32; 3]) -> bool {
     let p0 = positions[a as usize];
     let e1 = positions[b as usize] - p0;
     let e2 = positions[c as usize] - p0;
@@ -425,6 +425,7 @@ fn located(file: &Path, line: usize, field: &str, message: String) -> SceneError
     SceneError {
         file: file.to_path_buf(),
         line: Some(line),
+        column: None,
         field: field.to_string(),
         message,
     }

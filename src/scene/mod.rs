@@ -12,7 +12,9 @@
 mod document;
 mod format;
 mod mesh;
-mod transform;
+mod pbrt;
+mod ply;
+pub(crate) mod transform;
 mod validate;
 
 use glam::Vec3;
@@ -39,6 +41,17 @@ pub struct Camera {
     pub fov_y_degrees: f32,
     pub width: u32,
     pub height: u32,
+    /// Which way the image's x axis runs.
+    pub handedness: Handedness,
+}
+
+/// The image's x axis runs along `forward × up` (right-handed, dpm's TOML default) or along
+/// `up × forward` (left-handed, as pbrt's camera space: a pbrt `LookAt` camera).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Handedness {
+    #[default]
+    Right,
+    Left,
 }
 
 /// `power` is the total emitted flux in watts per channel.
@@ -97,12 +110,14 @@ pub struct TriangleMesh {
 
 /// A scene error names the file, the line (when known) and the field.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{}{}: {field}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+#[error("{}{}{}: {field}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default(), column.map(|c| format!(":{c}")).unwrap_or_default())]
 pub struct SceneError {
     /// The scene file, or the OBJ/MTL file when the problem lies inside one.
     pub file: PathBuf,
     /// 1-based line in `file`.
     pub line: Option<usize>,
+    /// 1-based column in `line`, where the format has a finer place than the line (pbrt).
+    pub column: Option<usize>,
     /// Field path in the scene file, e.g. `objects[2].radius` or `camera.fov_y`.
     pub field: String,
     pub message: String,
@@ -116,18 +131,45 @@ pub struct LoadReport {
     /// Problems that do not stop a render but probably spoil it (e.g. a light sealed inside
     /// a closed opaque object the camera is outside of).
     pub warnings: Vec<String>,
+    /// What was read and deliberately not used (a pbrt file's Sampler or Integrator).
+    pub notes: Vec<String>,
 }
 
-/// Reads and checks the scene file at `path`; mesh files resolve relative to its folder.
+/// How to read a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Refuse what would otherwise be mapped with a warning (a pbrt material dpm cannot
+    /// represent exactly).
+    pub strict: bool,
+}
+
+/// Reads and checks the scene file at `path` (TOML, or pbrt by the `.pbrt` extension); mesh
+/// files resolve relative to its folder.
 pub fn load(path: &Path) -> Result<SceneDescription, SceneError> {
     load_with_report(path).map(|(scene, _report)| scene)
 }
 
 /// [`load`], also returning what was repaired on the way.
 pub fn load_with_report(path: &Path) -> Result<(SceneDescription, LoadReport), SceneError> {
+    load_with_options(path, &LoadOptions::default())
+}
+
+/// [`load_with_report`] with `options`.
+pub fn load_with_options(
+    path: &Path,
+    options: &LoadOptions,
+) -> Result<(SceneDescription, LoadReport), SceneError> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pbrt"))
+        && !path.is_dir()
+    {
+        return pbrt::load(path, options);
+    }
     let whole_file_error = |message: String| SceneError {
         file: path.to_path_buf(),
         line: None,
+        column: None,
         field: "scene".into(),
         message,
     };
@@ -151,6 +193,7 @@ fn not_utf8(path: &Path, err: std::string::FromUtf8Error) -> SceneError {
     SceneError {
         file: path.to_path_buf(),
         line: Some(1 + bytes[..at].iter().filter(|&&b| b == b'\n').count()),
+        column: None,
         field: "scene".into(),
         message: format!(
             "is not UTF-8 text: byte 0x{:02x} at column {} is not valid UTF-8",

@@ -16,9 +16,9 @@ pub(crate) struct Transform {
 impl Transform {
     /// `scale` has positive finite factors, so the map is invertible and keeps orientation.
     pub(crate) fn new(translate: Vec3, rotate_degrees: Vec3, scale: Vec3) -> Transform {
-        let rotation = Mat3::from_rotation_z(rotate_degrees.z.to_radians())
-            * Mat3::from_rotation_y(rotate_degrees.y.to_radians())
-            * Mat3::from_rotation_x(rotate_degrees.x.to_radians());
+        let rotation = rotation(Vec3::Z, rotate_degrees.z)
+            * rotation(Vec3::Y, rotate_degrees.y)
+            * rotation(Vec3::X, rotate_degrees.x);
         let linear = rotation * Mat3::from_diagonal(scale);
         // (R S)^-T = R S^-1, exact without a general inverse.
         let normal_map = rotation * Mat3::from_diagonal(scale.recip());
@@ -40,12 +40,63 @@ impl Transform {
     }
 }
 
+/// Sine and cosine of an angle in degrees, exact (0 and ±1) at multiples of 90°, so that a
+/// quarter turn maps vertices exactly and two formats placing a mesh the same way agree to
+/// the bit.
+pub(crate) fn sin_cos_degrees(degrees: f32) -> (f32, f32) {
+    let quarter = degrees / 90.0;
+    if quarter.fract() == 0.0 && quarter.abs() < 1e6 {
+        return match (quarter as i64).rem_euclid(4) {
+            0 => (0.0, 1.0),
+            1 => (1.0, 0.0),
+            2 => (0.0, -1.0),
+            _ => (-1.0, 0.0),
+        };
+    }
+    degrees.to_radians().sin_cos()
+}
+
+/// Rotation by `degrees` about the unit `axis`, right-hand rule.
+pub(crate) fn rotation(axis: Vec3, degrees: f32) -> Mat3 {
+    let (s, c) = sin_cos_degrees(degrees);
+    let a = axis;
+    let t = 1.0 - c;
+    Mat3::from_cols(
+        Vec3::new(
+            a.x * a.x + (1.0 - a.x * a.x) * c,
+            a.x * a.y * t + a.z * s,
+            a.x * a.z * t - a.y * s,
+        ),
+        Vec3::new(
+            a.x * a.y * t - a.z * s,
+            a.y * a.y + (1.0 - a.y * a.y) * c,
+            a.y * a.z * t + a.x * s,
+        ),
+        Vec3::new(
+            a.x * a.z * t + a.y * s,
+            a.y * a.z * t - a.x * s,
+            a.z * a.z + (1.0 - a.z * a.z) * c,
+        ),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn rotation_matches_glam_and_is_exact_at_quarter_turns() {
+        let axis = Vec3::new(1.0, 2.0, -0.5).normalize();
+        let ours = rotation(axis, 37.0);
+        let glam = Mat3::from_axis_angle(axis, 37f32.to_radians());
+        assert!(ours.abs_diff_eq(glam, 1e-6), "{ours} vs {glam}");
+        let q = rotation(Vec3::X, -90.0);
+        assert_eq!(q * Vec3::new(0.3, 0.7, 1.9), Vec3::new(0.3, 1.9, -0.7));
+        assert_eq!(sin_cos_degrees(540.0), (0.0, -1.0));
     }
 
     #[test]

@@ -103,6 +103,10 @@ pub(crate) fn camera(doc: &Document, spec: &CameraSpec) -> Result<Camera, SceneE
         look_at,
         up,
         fov_y_degrees: fov,
+        handedness: match spec.handedness {
+            super::format::HandednessSpec::Right => super::Handedness::Right,
+            super::format::HandednessSpec::Left => super::Handedness::Left,
+        },
         width: spec.resolution[0],
         height: spec.resolution[1],
     })

@@ -1,0 +1,195 @@
+//! pbrt's lights as dpm's. pbrt gives a point or spot light's intensity `I` (W/sr), an area
+//! light's radiance `L`, a distant light's irradiance, each times `scale` (pbrt-v4's `power`
+//! gives the flux itself); dpm's lights carry their total flux, so the conversions below are
+//! the integrals of pbrt's emission: 4π·I for a point, A·π·L for a one-sided emitter. Owns the
+//! conversions; must not place shapes (it asks [`super::shapes`] for an emitter's geometry).
+
+use super::super::parser::{Item, ShapeItem};
+use super::shapes::Geometry;
+use super::{Mapper, param_error, value_error};
+use crate::scene::{Light, SceneError};
+use glam::{Mat4, Vec3};
+use std::f32::consts::PI;
+
+impl Mapper {
+    /// `I` or `L` (default 1) times `scale` (an RGB in pbrt-v3, a float in pbrt-v4).
+    fn emission(&self, item: &Item, name: &str) -> Result<Vec3, SceneError> {
+        let p = |e| param_error(&item.at, "LightSource", e);
+        let value = item.params.colour(name).map_err(p)?.unwrap_or(Vec3::ONE);
+        let scale = item.params.colour("scale").map_err(p)?.unwrap_or(Vec3::ONE);
+        Ok(value * scale)
+    }
+
+    /// pbrt-v4's `power`, when given: the light's total flux, whatever `I` or `L` say.
+    fn given_power(&self, item: &Item) -> Result<Option<f32>, SceneError> {
+        item.params
+            .float("power")
+            .map_err(|e| param_error(&item.at, "LightSource", e))
+    }
+
+    pub(super) fn light(&mut self, item: &Item, ctm: &Mat4) -> Result<Light, SceneError> {
+        let p = |e| param_error(&item.at, "LightSource", e);
+        let point = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
+            let v = item.params.vec3(name).map_err(p)?;
+            Ok(ctm.transform_point3(v.map_or(default, |v| v)))
+        };
+        let light = match item.kind.as_str() {
+            "point" => {
+                let position = point("from", Vec3::ZERO)?;
+                let intensity = self.emission(item, "I")?;
+                let power = match self.given_power(item)? {
+                    Some(phi) => normalised(intensity) * phi,
+                    None => intensity * (4.0 * PI),
+                };
+                Light::Point { position, power }
+            }
+            "spot" | "distant" | "infinite" => {
+                return Err(item.at.error(
+                    "LightSource",
+                    format!("light \"{}\" is not supported yet", item.kind),
+                ));
+            }
+            "goniometric" | "projection" => {
+                return Err(item.at.error(
+                    "LightSource",
+                    format!(
+                        "light \"{}\" needs an image, which dpm does not read",
+                        item.kind
+                    ),
+                ));
+            }
+            other => {
+                return Err(item
+                    .at
+                    .error("LightSource", format!("\"{other}\" is not a pbrt light")));
+            }
+        };
+        self.checked(item, "LightSource", light)
+    }
+
+    /// An `AreaLightSource "diffuse"` on `shape`: a sphere emitter, a quad emitter for a
+    /// two-triangle parallelogram, else a mesh emitter.
+    pub(super) fn area_light(
+        &mut self,
+        shape: &ShapeItem,
+        area: &Item,
+    ) -> Result<Light, SceneError> {
+        if area.kind != "diffuse" {
+            return Err(area.at.error(
+                "AreaLightSource",
+                format!("\"{}\": dpm's area lights are diffuse emitters", area.kind),
+            ));
+        }
+        let p = |e| param_error(&area.at, "AreaLightSource", e);
+        if area.params.at("filename").is_some() {
+            return Err(value_error(
+                area,
+                "AreaLightSource",
+                "filename",
+                "image emitters are not supported".into(),
+            ));
+        }
+        let two_sided = area.params.bool("twosided").map_err(p)?.unwrap_or(false);
+        let radiance = self.emission(area, "L")?;
+        let given = self.given_power(area)?;
+        let sides = if two_sided { 2.0 } else { 1.0 };
+        let flux = |area_m2: f32| match given {
+            Some(phi) => normalised(radiance) * phi,
+            None => radiance * (PI * area_m2 * sides),
+        };
+        let light = match self.geometry(shape)? {
+            Geometry::Sphere { center, radius } => {
+                if shape.reverse_orientation {
+                    return Err(shape.item.at.error(
+                        "Shape",
+                        "a sphere light turned inside out (ReverseOrientation) is not supported",
+                    ));
+                }
+                let power = match given {
+                    Some(phi) => normalised(radiance) * phi,
+                    None => radiance * (PI * 4.0 * PI * radius * radius),
+                };
+                Light::Sphere {
+                    center,
+                    radius,
+                    power,
+                }
+            }
+            Geometry::Triangles(mesh) => {
+                let area_m2: f32 = mesh
+                    .triangles
+                    .iter()
+                    .map(|&[a, b, c]| {
+                        let p = |i: u32| mesh.positions[i as usize];
+                        0.5 * (p(b) - p(a)).cross(p(c) - p(a)).length()
+                    })
+                    .sum();
+                match (two_sided, parallelogram(&mesh.positions, &mesh.triangles)) {
+                    (false, Some((corner, edge_u, edge_v))) => Light::Quad {
+                        corner,
+                        edge_u,
+                        edge_v,
+                        power: flux(area_m2),
+                    },
+                    _ => {
+                        return Err(shape.item.at.error(
+                            "AreaLightSource",
+                            "an area light on a mesh other than one quad is not supported yet",
+                        ));
+                    }
+                }
+            }
+        };
+        self.checked(area, "AreaLightSource", light)
+    }
+
+    fn checked(&self, item: &Item, directive: &str, light: Light) -> Result<Light, SceneError> {
+        let power = match &light {
+            Light::Point { power, .. }
+            | Light::Sphere { power, .. }
+            | Light::Quad { power, .. } => *power,
+        };
+        if !(power.is_finite() && power.min_element() >= 0.0 && power.max_element() > 0.0) {
+            return Err(item.at.error(
+                directive,
+                format!("light \"{}\" emits {power}: each channel must be finite and >= 0, and not all 0", item.kind),
+            ));
+        }
+        Ok(light)
+    }
+}
+
+/// `c` scaled to unit luminance: pbrt-v4's `power` sets the photometric flux and keeps the
+/// colour's ratios.
+fn normalised(c: Vec3) -> Vec3 {
+    let y = c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+    if y > 0.0 { c / y } else { c }
+}
+
+/// Two triangles that make one parallelogram, as (corner, edge_u, edge_v) with
+/// `edge_u × edge_v` along their winding's normal. The corner is the first vertex of the
+/// first triangle that starts a diagonal, so `[a b c] [a c d]` gives corner a, edges b − a
+/// and d − a: the same quad the TOML format builds.
+fn parallelogram(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<(Vec3, Vec3, Vec3)> {
+    let [t0, t1] = triangles else { return None };
+    if positions.len() != 4 {
+        return None;
+    }
+    let p = |i: u32| positions[i as usize];
+    // Turn t0 so its one corner not in t1 sits in the middle: x → y → z, then t1's own w.
+    let k = (0..3).find(|&k| !t1.contains(&t0[(k + 1) % 3]))?;
+    let (x, y, z) = (t0[k], t0[(k + 1) % 3], t0[(k + 2) % 3]);
+    let w = *t1.iter().find(|i| !t0.contains(i))?;
+    if !(t1.contains(&x) && t1.contains(&z)) {
+        return None;
+    }
+    let (edge_u, edge_v) = (p(y) - p(x), p(w) - p(x));
+    let size = edge_u.length().max(edge_v.length());
+    let closes = (p(x) + edge_u + edge_v - p(z)).length() <= 1e-5 * size;
+    // t1 must wind the same way as t0 (x → z → w).
+    let same_winding = [x, z, w]
+        .iter()
+        .zip([z, w, x].iter())
+        .all(|(a, b)| (0..3).any(|j| t1[j] == *a && t1[(j + 1) % 3] == *b));
+    (closes && same_winding).then_some((p(x), edge_u, edge_v))
+}

@@ -1,0 +1,263 @@
+//! pbrt's materials as dpm's three: `matte`/`diffuse` → diffuse, `mirror` and smooth
+//! `conductor`/`metal` → mirror (tinted by their reflectance), `glass`/`dielectric` →
+//! glass. Materials with more lobes than dpm has (`uber`, `plastic`, `substrate`,
+//! `coateddiffuse`, rough metals) become their diffuse part with one warning, or an error
+//! under `--strict`. Owns that table; must not read files.
+
+use super::super::Place;
+use super::super::params::ParamList;
+use super::{Mapper, param_error};
+use crate::scene::{Material, SceneError};
+use glam::Vec3;
+
+/// Refractive indices at the d line (587.6 nm) of the named glasses pbrt-v4 ships, from
+/// Schott's catalogue.
+const NAMED_GLASSES: &[(&str, f32)] = &[
+    ("glass-BK7", 1.5168),
+    ("glass-BAF10", 1.6700),
+    ("glass-FK51A", 1.4866),
+    ("glass-LASF9", 1.8503),
+];
+
+/// Normal-incidence reflectance (linear sRGB) of the metals pbrt names, for a smooth
+/// conductor given by a named η/k spectrum.
+const NAMED_METALS: &[(&str, [f32; 3])] = &[
+    ("Cu", [0.955, 0.638, 0.538]),
+    ("Au", [1.000, 0.766, 0.336]),
+    ("Ag", [0.972, 0.960, 0.915]),
+    ("Al", [0.913, 0.922, 0.924]),
+];
+
+/// What a pbrt material became.
+pub(super) struct Mapped {
+    pub material: Material,
+    /// Why this is an approximation, when it is one.
+    pub approximation: Option<String>,
+}
+
+impl Mapper {
+    pub(super) fn material(
+        &mut self,
+        kind: &str,
+        params: &ParamList,
+        at: &Place,
+    ) -> Result<Mapped, SceneError> {
+        let p = |e| param_error(at, "Material", e);
+        let colour = |name: &str, default: f32| -> Result<Vec3, SceneError> {
+            Ok(params
+                .colour(name)
+                .map_err(p)?
+                .unwrap_or(Vec3::splat(default)))
+        };
+        let exact = |material| Mapped {
+            material,
+            approximation: None,
+        };
+        let diffuse_part = |name: &str, default: f32| -> Result<Mapped, SceneError> {
+            let albedo = colour(name, default)?;
+            Ok(Mapped {
+                material: Material::Diffuse { albedo },
+                approximation: Some(format!(
+                    "material \"{kind}\" is rendered as its diffuse part ({name} = {}); dpm \
+                     has no glossy or coated lobes",
+                    rgb_text(albedo)
+                )),
+            })
+        };
+        let roughness = |names: &[&str]| -> Result<f32, SceneError> {
+            let mut r: f32 = 0.0;
+            for name in names {
+                r = r.max(params.float(name).map_err(p)?.unwrap_or(0.0));
+            }
+            Ok(r)
+        };
+        let mapped = match kind {
+            "matte" => {
+                let albedo = colour("Kd", 0.5)?;
+                let sigma = params.float("sigma").map_err(p)?.unwrap_or(0.0);
+                Mapped {
+                    material: Material::Diffuse { albedo },
+                    approximation: (sigma != 0.0).then(|| {
+                        format!(
+                            "matte \"sigma\" {sigma}: Oren–Nayar roughness is rendered as Lambert"
+                        )
+                    }),
+                }
+            }
+            "diffuse" => exact(Material::Diffuse {
+                albedo: colour("reflectance", 0.5)?,
+            }),
+            "mirror" => {
+                let tint = colour("Kr", 0.9)?;
+                exact(self.mirror(tint))
+            }
+            "glass" => {
+                let ior = params.float("index").map_err(p)?;
+                let ior = match ior {
+                    Some(x) => x,
+                    None => params.float("eta").map_err(p)?.unwrap_or(1.5),
+                };
+                let rough = roughness(&["uroughness", "vroughness"])?;
+                params.bool("remaproughness").map_err(p)?;
+                let material = self.glass(ior, colour("Kr", 1.0)?, colour("Kt", 1.0)?);
+                Mapped {
+                    material,
+                    approximation: (rough > 0.0)
+                        .then(|| format!("glass roughness {rough} is rendered as smooth glass")),
+                }
+            }
+            "dielectric" | "thindielectric" => {
+                let ior =
+                    match params.spectrum_name("eta") {
+                        Some(name) => {
+                            named_glass(&name).ok_or_else(|| {
+                                at.error(
+                            "Material \"spectrum eta\"",
+                            format!(
+                                "\"{name}\" is not a glass dpm knows ({}); give a float eta",
+                                NAMED_GLASSES.iter().map(|g| g.0).collect::<Vec<_>>().join(", ")
+                            ),
+                        )
+                            })?
+                        }
+                        None => match params.float("eta").map_err(p)? {
+                            Some(x) => x,
+                            None => params.colour("eta").map_err(p)?.map_or(1.5, |c| c.x),
+                        },
+                    };
+                let rough = roughness(&["roughness", "uroughness", "vroughness"])?;
+                params.bool("remaproughness").map_err(p)?;
+                let mut why = (rough > 0.0)
+                    .then(|| format!("{kind} roughness {rough} is rendered as smooth glass"));
+                if kind == "thindielectric" {
+                    why = Some("thindielectric is rendered as a solid dielectric".into());
+                }
+                Mapped {
+                    material: self.glass(ior, Vec3::ONE, Vec3::ONE),
+                    approximation: why,
+                }
+            }
+            "conductor" | "metal" => {
+                let reflectance = self.conductor_reflectance(params, at)?;
+                let default_roughness = if kind == "metal" { 0.01 } else { 0.0 };
+                let rough = match params.float("roughness").map_err(p)? {
+                    Some(r) => r.max(roughness(&["uroughness", "vroughness"])?),
+                    None => {
+                        let r = roughness(&["uroughness", "vroughness"])?;
+                        if params.at("uroughness").is_some() || params.at("vroughness").is_some() {
+                            r
+                        } else {
+                            default_roughness
+                        }
+                    }
+                };
+                params.bool("remaproughness").map_err(p)?;
+                if rough == 0.0 {
+                    exact(self.mirror(reflectance))
+                } else {
+                    Mapped {
+                        material: Material::Diffuse {
+                            albedo: reflectance.min(Vec3::ONE),
+                        },
+                        approximation: Some(format!(
+                            "{kind} with roughness {rough} is rendered as diffuse with its \
+                             normal-incidence reflectance {}; dpm has no glossy lobe",
+                            rgb_text(reflectance)
+                        )),
+                    }
+                }
+            }
+            "uber" | "plastic" | "translucent" => diffuse_part("Kd", 0.25)?,
+            "substrate" => diffuse_part("Kd", 0.5)?,
+            "coateddiffuse" => diffuse_part("reflectance", 0.5)?,
+            "mix"
+            | "hair"
+            | "measured"
+            | "subsurface"
+            | "kdsubsurface"
+            | "fourier"
+            | "disney"
+            | "coatedconductor"
+            | "diffusetransmission" => {
+                return Err(at.error(
+                    "Material",
+                    format!("material \"{kind}\" has no part dpm can render (dpm has diffuse, mirror and glass)"),
+                ));
+            }
+            "interface" | "" | "none" => {
+                return Err(at.error(
+                    "Material",
+                    format!("material \"{kind}\" (a medium boundary) is not supported: dpm has no participating media"),
+                ));
+            }
+            other => {
+                return Err(at.error("Material", format!("\"{other}\" is not a pbrt material")));
+            }
+        };
+        for ignored in ["bumpmap", "displacement", "normalmap"] {
+            if params.at(ignored).is_some() {
+                self.warn(at, format!("material \"{kind}\": \"{ignored}\" is ignored"));
+                params.mark_used(ignored);
+            }
+        }
+        Ok(mapped)
+    }
+
+    /// A smooth conductor's colour: `reflectance`, else F0 from constant η and k (pbrt-v4's
+    /// default conductor is copper).
+    fn conductor_reflectance(&self, params: &ParamList, at: &Place) -> Result<Vec3, SceneError> {
+        let p = |e| param_error(at, "Material", e);
+        if let Some(r) = params.colour("reflectance").map_err(p)? {
+            return Ok(r);
+        }
+        let named = |param: &str| params.spectrum_name(param);
+        let (eta_name, k_name) = (named("eta"), named("k"));
+        if eta_name.is_some() || k_name.is_some() {
+            let name = eta_name.or(k_name).unwrap_or_default();
+            let metal = name
+                .strip_prefix("metal-")
+                .and_then(|rest| rest.split('-').next())
+                .unwrap_or("");
+            return NAMED_METALS
+                .iter()
+                .find(|(m, _)| *m == metal)
+                .map(|(_, f0)| Vec3::from_array(*f0))
+                .ok_or_else(|| {
+                    at.error(
+                        "Material \"spectrum eta\"",
+                        format!("\"{name}\" is not a metal dpm knows (metal-Cu, -Au, -Ag, -Al); give rgb eta and k or a reflectance"),
+                    )
+                });
+        }
+        let eta = params.colour("eta").map_err(p)?;
+        let k = params.colour("k").map_err(p)?;
+        Ok(match (eta, k) {
+            (None, None) => Vec3::from_array(NAMED_METALS[0].1),
+            (eta, k) => {
+                let eta = eta.unwrap_or(Vec3::ONE);
+                let k = k.unwrap_or(Vec3::ZERO);
+                let one = Vec3::ONE;
+                ((eta - one) * (eta - one) + k * k) / ((eta + one) * (eta + one) + k * k)
+            }
+        })
+    }
+}
+
+impl Mapper {
+    /// dpm's mirror for pbrt's reflectance `tint`.
+    fn mirror(&self, _tint: Vec3) -> Material {
+        Material::Mirror
+    }
+
+    fn glass(&self, ior: f32, _reflect: Vec3, _transmit: Vec3) -> Material {
+        Material::Glass { ior }
+    }
+}
+
+fn named_glass(name: &str) -> Option<f32> {
+    NAMED_GLASSES.iter().find(|g| g.0 == name).map(|g| g.1)
+}
+
+pub(super) fn rgb_text(c: Vec3) -> String {
+    format!("[{} {} {}]", c.x, c.y, c.z)
+}

@@ -1,0 +1,340 @@
+//! What the parsed pbrt directives become in dpm: the camera (pbrt's `fov` is for the shorter
+//! image axis; its camera space is left-handed), the lights (pbrt gives intensity or radiance,
+//! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`]).
+//! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
+//! Owns the mapping; must not parse text.
+
+mod lights;
+mod materials;
+mod shapes;
+
+use super::params::ParamError;
+use super::parser::{CameraItem, Item, Parsed};
+use super::{Dialect, Place};
+use crate::scene::{
+    Camera, Handedness, LoadOptions, LoadReport, Material, SceneDescription, SceneError, validate,
+};
+use glam::{Mat4, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// pbrt's default film size.
+const DEFAULT_RESOLUTION: [i64; 2] = [640, 480];
+/// A side longer than this is surely a typo, and its film would not fit in memory.
+const MAX_RESOLUTION: i64 = 1 << 16;
+
+pub(super) struct Mapper {
+    folder: PathBuf,
+    strict: bool,
+    dialect: (Dialect, String),
+    report: LoadReport,
+    materials: Vec<Material>,
+    /// Scene material index of each parsed material definition (`usize::MAX`: pbrt's
+    /// default), filled on first use.
+    material_index: HashMap<usize, u32>,
+}
+
+pub(super) fn param_error(at: &Place, directive: &str, e: ParamError) -> SceneError {
+    SceneError {
+        file: at.file.clone(),
+        line: Some(e.line),
+        column: Some(e.column),
+        field: format!("{directive} {}", e.field),
+        message: e.message,
+    }
+}
+
+pub(super) fn scene(
+    path: &Path,
+    parsed: Parsed,
+    options: &LoadOptions,
+) -> Result<(SceneDescription, LoadReport), SceneError> {
+    let mut m = Mapper {
+        folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
+        strict: options.strict,
+        dialect: parsed.dialect.dialect(),
+        report: LoadReport::default(),
+        materials: Vec::new(),
+        material_index: HashMap::new(),
+    };
+    m.report.warnings.extend(parsed.warnings.iter().cloned());
+    let version = match m.dialect.0 {
+        Dialect::V3 => 3,
+        Dialect::V4 => 4,
+    };
+    m.report
+        .notes
+        .push(format!("read as pbrt-v{version}: {}", m.dialect.1));
+    m.report.notes.extend(
+        parsed
+            .ignored
+            .iter()
+            .map(|i| format!("{i}: ignored (dpm's own settings and flags apply)")),
+    );
+    let camera = m.camera(parsed.camera.as_ref(), parsed.film.as_ref())?;
+    let mut lights = Vec::new();
+    for light in &parsed.lights {
+        lights.push(m.light(&light.item, &light.ctm)?);
+        m.unused(&light.item, "LightSource");
+    }
+    let mut shapes = Vec::new();
+    for shape in &parsed.shapes {
+        match shape.area_light {
+            Some(a) => {
+                let area = &parsed.area_lights[a];
+                lights.push(m.area_light(shape, area)?);
+                m.unused(area, "AreaLightSource");
+            }
+            None => {
+                let material = m.material_of(shape.material, &parsed)?;
+                shapes.extend(m.shape(shape, material)?);
+            }
+        }
+        m.unused(&shape.item, "Shape");
+    }
+    let first = || Place {
+        file: path.to_path_buf(),
+        line: 1,
+        column: 1,
+    };
+    if lights.is_empty() {
+        return Err(first().error(
+            "LightSource",
+            "the scene has no light dpm can use (LightSource or AreaLightSource)",
+        ));
+    }
+    if shapes.is_empty() {
+        return Err(first().error("Shape", "the scene has no shapes besides its lights"));
+    }
+    let scene = SceneDescription {
+        source: path.to_path_buf(),
+        camera,
+        lights,
+        materials: m.materials,
+        shapes,
+    };
+    let mut report = m.report;
+    report
+        .warnings
+        .extend(validate::enclosed_light_warnings(&scene));
+    Ok((scene, report))
+}
+
+impl Mapper {
+    pub(super) fn warn(&mut self, at: &Place, message: String) {
+        self.report.warnings.push(format!("{at}: {message}"));
+    }
+
+    /// Warns once about every parameter of `item` the mapping did not read.
+    fn unused(&mut self, item: &Item, directive: &str) {
+        let unused = item.params.unused();
+        if !unused.is_empty() {
+            let at = item.at.clone();
+            self.warn(
+                &at,
+                format!(
+                    "{directive} \"{}\": dpm ignores {}",
+                    item.kind,
+                    unused.join(", ")
+                ),
+            );
+        }
+    }
+
+    fn camera(
+        &mut self,
+        camera: Option<&CameraItem>,
+        film: Option<&Item>,
+    ) -> Result<Camera, SceneError> {
+        let mut resolution = DEFAULT_RESOLUTION;
+        if let Some(film) = film {
+            let p = |e| param_error(&film.at, "Film", e);
+            for (axis, name) in ["xresolution", "yresolution"].into_iter().enumerate() {
+                if let Some(n) = film.params.integer(name).map_err(p)? {
+                    if !(1..=MAX_RESOLUTION).contains(&n) {
+                        return Err(film
+                            .params
+                            .error_at(name, format!("{n} is not from 1 to {MAX_RESOLUTION}"))
+                            .map(p)
+                            .expect("parameter exists"));
+                    }
+                    resolution[axis] = n;
+                }
+            }
+            film.params.string("filename").map_err(p)?;
+            if film.params.at("cropwindow").is_some() {
+                self.warn(
+                    &film.at,
+                    "Film \"cropwindow\" is ignored: dpm renders the whole frame".into(),
+                );
+                film.params.floats("cropwindow").map_err(p)?;
+            }
+            self.unused(film, "Film");
+        }
+        let (width, height) = (resolution[0] as u32, resolution[1] as u32);
+        let (camera_to_world, fov) = match camera {
+            None => (Mat4::IDENTITY, 90.0),
+            Some(c) => {
+                let at = &c.item.at;
+                if c.item.kind != "perspective" {
+                    return Err(at.error(
+                        "Camera",
+                        format!(
+                            "\"{}\": dpm has a perspective pinhole camera only",
+                            c.item.kind
+                        ),
+                    ));
+                }
+                let p = |e| param_error(at, "Camera", e);
+                let fov = c.item.params.float("fov").map_err(p)?.unwrap_or(90.0);
+                if !(fov > 0.0 && fov < 180.0) {
+                    return Err(c
+                        .item
+                        .params
+                        .error_at("fov", format!("{fov} is not in (0, 180) degrees"))
+                        .map(p)
+                        .expect("parameter exists"));
+                }
+                let lens = c.item.params.float("lensradius").map_err(p)?.unwrap_or(0.0);
+                c.item.params.float("focaldistance").map_err(p)?;
+                if lens > 0.0 {
+                    self.warn(at, format!("Camera \"lensradius\" {lens}: depth of field is not supported; rendered as a pinhole"));
+                }
+                self.unused(&c.item, "Camera");
+                (c.camera_to_world, fov)
+            }
+        };
+        // pbrt's fov spans the shorter image axis; dpm's spans the height.
+        let fov_y = if width < height {
+            let half = (fov as f64).to_radians() * 0.5;
+            (2.0 * (half.tan() * height as f64 / width as f64)
+                .atan()
+                .to_degrees()) as f32
+        } else {
+            fov
+        };
+        let position = camera_to_world.transform_point3(Vec3::ZERO);
+        let forward = camera_to_world
+            .transform_vector3(Vec3::Z)
+            .normalize_or_zero();
+        let up = camera_to_world.transform_vector3(Vec3::Y);
+        let right = camera_to_world.transform_vector3(Vec3::X);
+        let at = camera.map(|c| c.item.at.clone()).unwrap_or(Place {
+            file: PathBuf::new(),
+            line: 1,
+            column: 1,
+        });
+        if forward == Vec3::ZERO || forward.cross(up).length() < 1e-9 * up.length() {
+            return Err(at.error(
+                "Camera",
+                "the camera transform has no usable view direction and up vector",
+            ));
+        }
+        // pbrt's raster x runs along the camera's +x; dpm's along forward × up unless mirrored.
+        let handedness = if right.dot(forward.cross(up)) >= 0.0 {
+            Handedness::Right
+        } else {
+            Handedness::Left
+        };
+        Ok(Camera {
+            position,
+            look_at: (position + forward),
+            up: up.normalize(),
+            fov_y_degrees: fov_y,
+            width,
+            height,
+            handedness,
+        })
+    }
+
+    /// The scene material of a shape's pbrt material, mapping it on first use.
+    fn material_of(&mut self, which: Option<usize>, parsed: &Parsed) -> Result<u32, SceneError> {
+        let key = which.unwrap_or(usize::MAX);
+        if let Some(&i) = self.material_index.get(&key) {
+            return Ok(i);
+        }
+        let material = match which {
+            None => Material::Diffuse {
+                albedo: Vec3::splat(0.5),
+            },
+            Some(i) => {
+                let (name, item) = &parsed.materials[i];
+                let mapped = self.material(&item.kind, &item.params, &item.at)?;
+                let label = name
+                    .as_ref()
+                    .map(|n| format!("material \"{n}\" ({})", item.kind))
+                    .unwrap_or_else(|| format!("material \"{}\"", item.kind));
+                if let Some(why) = mapped.approximation {
+                    if self.strict {
+                        return Err(item
+                            .at
+                            .error("Material", format!("{why} (refused under --strict)")));
+                    }
+                    let at = item.at.clone();
+                    self.warn(&at, why);
+                }
+                let unused = item.params.unused();
+                if !unused.is_empty() {
+                    let at = item.at.clone();
+                    self.warn(&at, format!("{label}: dpm ignores {}", unused.join(", ")));
+                }
+                check_material(&mapped.material)
+                    .map_err(|why| item.at.error("Material", format!("{label}: {why}")))?;
+                mapped.material
+            }
+        };
+        let index = self.materials.len() as u32;
+        self.materials.push(material);
+        self.material_index.insert(key, index);
+        Ok(index)
+    }
+}
+
+/// Reads a shape's one parameter list value or fails at it.
+pub(super) fn require<T>(
+    value: Result<Option<T>, ParamError>,
+    item: &Item,
+    name: &str,
+    directive: &str,
+) -> Result<T, SceneError> {
+    value
+        .map_err(|e| param_error(&item.at, directive, e))?
+        .ok_or_else(|| {
+            item.at.error(
+                directive,
+                format!(
+                    "{directive} \"{}\" needs the parameter \"{name}\"",
+                    item.kind
+                ),
+            )
+        })
+}
+
+/// The parameter list of `item` and its place, for errors about a value.
+pub(super) fn value_error(item: &Item, directive: &str, name: &str, message: String) -> SceneError {
+    match item.params.error_at(name, message.clone()) {
+        Some(e) => param_error(&item.at, directive, e),
+        None => item.at.error(directive, message),
+    }
+}
+
+/// The checks the TOML format makes of a material.
+fn check_material(m: &Material) -> Result<(), String> {
+    match m {
+        Material::Diffuse { albedo }
+            if !albedo
+                .to_array()
+                .into_iter()
+                .all(validate::is_albedo_channel) =>
+        {
+            Err(format!(
+                "reflectance {} has a channel outside [0, 1]",
+                materials::rgb_text(*albedo)
+            ))
+        }
+        Material::Glass { ior } if !validate::is_ior(*ior) => {
+            Err(format!("index of refraction {ior} is below 1"))
+        }
+        _ => Ok(()),
+    }
+}

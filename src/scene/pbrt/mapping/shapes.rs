@@ -1,0 +1,283 @@
+//! pbrt's shapes as dpm's: `trianglemesh`, `plymesh` (through [`crate::scene::ply`]) and
+//! planar `bilinearmesh` patches become world-space triangle meshes wound so that their
+//! geometric normal is pbrt's (the side a glass is entered from, an area light emits to);
+//! full `sphere`s become spheres. Partial spheres and the other quadrics, curves and
+//! subdivision surfaces are refused. Owns placing shapes; must not choose materials.
+
+use super::super::parser::{Item, ShapeItem};
+use super::{Mapper, param_error, require, value_error};
+use crate::scene::{SceneError, Shape, TriangleMesh, mesh, ply};
+use glam::{Mat3, Vec3};
+
+/// A bilinear patch whose fourth corner is further than this (relative to its size) from
+/// the plane of the other three is not flat, and two triangles would not be the patch.
+const FLAT_PATCH: f32 = 1e-4;
+
+/// A shape's geometry in world space, before it is given a material or made a light.
+pub(in super::super) enum Geometry {
+    Sphere { center: Vec3, radius: f32 },
+    Triangles(TriangleMesh),
+}
+
+impl Mapper {
+    pub(super) fn shape(
+        &mut self,
+        shape: &ShapeItem,
+        material: u32,
+    ) -> Result<Vec<Shape>, SceneError> {
+        Ok(match self.geometry(shape)? {
+            Geometry::Sphere { center, radius } => vec![Shape::Sphere {
+                center,
+                radius,
+                material,
+            }],
+            Geometry::Triangles(mut mesh) => {
+                mesh.material = material;
+                vec![Shape::Triangles(mesh)]
+            }
+        })
+    }
+
+    pub(in super::super) fn geometry(&mut self, shape: &ShapeItem) -> Result<Geometry, SceneError> {
+        let item = &shape.item;
+        let p = |e| param_error(&item.at, "Shape", e);
+        if let Some(alpha) = item.params.float("alpha").map_err(p)?
+            && alpha != 1.0
+        {
+            return Err(value_error(
+                item,
+                "Shape",
+                "alpha",
+                format!("alpha {alpha}: cut-outs are not supported"),
+            ));
+        }
+        match item.kind.as_str() {
+            "sphere" => self.sphere(shape),
+            "trianglemesh" => {
+                let positions = require(item.params.vec3s("P"), item, "P", "Shape")?;
+                let indices = match item.params.integers("indices").map_err(p)? {
+                    Some(i) => i,
+                    None if positions.len() == 3 => vec![0, 1, 2],
+                    None => return Err(item.at.error("Shape", "trianglemesh needs \"integer indices\" (only a single triangle may leave them out)")),
+                };
+                if indices.len() % 3 != 0 {
+                    return Err(value_error(item, "Shape", "indices", format!("has {} indices, not a multiple of 3", indices.len())));
+                }
+                let normals = item.params.vec3s("N").map_err(p)?;
+                ignore(item, &["uv", "st", "S", "faceIndices"]);
+                let triangles = corner_triples(item, &indices, positions.len())?;
+                self.mesh(shape, positions, normals, triangles)
+            }
+            "plymesh" => {
+                let name = require(item.params.string("filename"), item, "filename", "Shape")?;
+                let path = super::super::parser::Parser::resolve(&self.folder, &name);
+                if item.params.at("displacement").is_some() {
+                    return Err(value_error(item, "Shape", "displacement", "displacement maps are not supported".into()));
+                }
+                ignore(item, &["edgelength"]);
+                let read = ply::read(&path).map_err(|e| match e.line {
+                    None if e.field == "file" => value_error(item, "Shape", "filename", format!("`{}`: {}", path.display(), e.message)),
+                    _ => SceneError {
+                        file: path.clone(),
+                        line: e.line,
+                        column: None,
+                        field: e.field,
+                        message: format!("{} (the mesh of the Shape at {})", e.message, item.at),
+                    },
+                })?;
+                self.mesh(shape, read.positions, read.normals, read.triangles)
+            }
+            "bilinearmesh" => {
+                let positions = require(item.params.vec3s("P"), item, "P", "Shape")?;
+                let indices = match item.params.integers("indices").map_err(p)? {
+                    Some(i) => i,
+                    None if positions.len() == 4 => vec![0, 1, 2, 3],
+                    None => return Err(item.at.error("Shape", "bilinearmesh needs \"integer indices\" (only a single patch may leave them out)")),
+                };
+                if indices.len() % 4 != 0 {
+                    return Err(value_error(item, "Shape", "indices", format!("has {} indices, not a multiple of 4", indices.len())));
+                }
+                let normals = item.params.vec3s("N").map_err(p)?;
+                ignore(item, &["uv", "faceIndices"]);
+                let corners = corner_indices(item, &indices, positions.len())?;
+                let mut triangles = Vec::with_capacity(corners.len() / 2);
+                for patch in corners.chunks_exact(4) {
+                    let [a, b, c, d] = [patch[0], patch[1], patch[2], patch[3]];
+                    let q = |i: u32| positions[i as usize];
+                    let n = (q(b) - q(a)).cross(q(c) - q(a));
+                    let size = (q(b) - q(a)).length().max((q(c) - q(a)).length()).max(1e-30);
+                    if n.length() > 0.0 && (q(d) - q(a)).dot(n.normalize()).abs() > FLAT_PATCH * size {
+                        return Err(item.at.error("Shape", "bilinearmesh: a patch is not flat, and dpm renders patches as two triangles"));
+                    }
+                    // pbrt's corners are p00, p10, p01, p11.
+                    triangles.push([a, b, d]);
+                    triangles.push([a, d, c]);
+                }
+                self.mesh(shape, positions, normals, triangles)
+            }
+            "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" | "curve" | "loopsubdiv"
+            | "nurbs" | "heightfield" => Err(item.at.error(
+                "Shape",
+                format!("shape \"{}\" is not supported: dpm renders triangle meshes and full spheres (convert it to a trianglemesh or plymesh)", item.kind),
+            )),
+            other => Err(item.at.error("Shape", format!("\"{other}\" is not a pbrt shape"))),
+        }
+    }
+
+    fn sphere(&mut self, shape: &ShapeItem) -> Result<Geometry, SceneError> {
+        let item = &shape.item;
+        let p = |e| param_error(&item.at, "Shape", e);
+        let radius = item.params.float("radius").map_err(p)?.unwrap_or(1.0);
+        if radius.is_nan() || radius <= 0.0 {
+            return Err(value_error(
+                item,
+                "Shape",
+                "radius",
+                format!("radius {radius} is not > 0"),
+            ));
+        }
+        let zmin = item.params.float("zmin").map_err(p)?.unwrap_or(-radius);
+        let zmax = item.params.float("zmax").map_err(p)?.unwrap_or(radius);
+        let phimax = item.params.float("phimax").map_err(p)?.unwrap_or(360.0);
+        if zmin > -radius || zmax < radius || phimax < 360.0 {
+            return Err(item.at.error(
+                "Shape",
+                "a partial sphere (zmin, zmax or phimax cut) is not supported; only full spheres",
+            ));
+        }
+        let m = Mat3::from_mat4(shape.ctm);
+        let scales = [m.x_axis.length(), m.y_axis.length(), m.z_axis.length()];
+        let mean = scales.iter().sum::<f32>() / 3.0;
+        let orthogonal = m.x_axis.dot(m.y_axis).abs()
+            + m.y_axis.dot(m.z_axis).abs()
+            + m.x_axis.dot(m.z_axis).abs();
+        if scales.iter().any(|s| (s - mean).abs() > 1e-5 * mean) || orthogonal > 1e-5 * mean * mean
+        {
+            return Err(item.at.error("Shape", "the sphere's transform is not a uniform scale with a rotation, so it is not a sphere in the world"));
+        }
+        let center = shape.ctm.transform_point3(Vec3::ZERO);
+        let radius = radius * mean;
+        if !(center.is_finite() && radius.is_finite() && radius > 0.0) {
+            return Err(item
+                .at
+                .error("Shape", "the transformed sphere is not finite"));
+        }
+        Ok(Geometry::Sphere { center, radius })
+    }
+
+    /// Places a mesh in the world, wound as pbrt orients it, without zero-area triangles.
+    fn mesh(
+        &mut self,
+        shape: &ShapeItem,
+        positions: Vec<Vec3>,
+        normals: Option<Vec<Vec3>>,
+        triangles: Vec<[u32; 3]>,
+    ) -> Result<Geometry, SceneError> {
+        let item = &shape.item;
+        if let Some(n) = &normals
+            && n.len() != positions.len()
+        {
+            return Err(value_error(
+                item,
+                "Shape",
+                "N",
+                format!("has {} normals for {} points", n.len(), positions.len()),
+            ));
+        }
+        let ctm = shape.ctm;
+        let world: Vec<Vec3> = positions.iter().map(|p| ctm.transform_point3(*p)).collect();
+        if world.iter().any(|p| !p.is_finite()) {
+            return Err(item.at.error("Shape", "a transformed vertex is not finite"));
+        }
+        let normal_matrix = Mat3::from_mat4(ctm).inverse().transpose();
+        let world_normals = match normals {
+            None => None,
+            Some(n) => {
+                let mut out = Vec::with_capacity(n.len());
+                for (i, n) in n.iter().enumerate() {
+                    let w = (normal_matrix * n).normalize_or_zero();
+                    if w == Vec3::ZERO || !w.is_finite() {
+                        return Err(value_error(
+                            item,
+                            "Shape",
+                            "N",
+                            format!("normal {i} is zero or not finite"),
+                        ));
+                    }
+                    out.push(w);
+                }
+                Some(out)
+            }
+        };
+        let swaps_handedness = Mat3::from_mat4(ctm).determinant() < 0.0;
+        let flip_all = shape.reverse_orientation ^ swaps_handedness;
+        let mut kept = Vec::with_capacity(triangles.len());
+        for [a, b, c] in triangles {
+            if mesh::has_zero_area(&world, [a, b, c]) {
+                self.report.degenerate_triangles_dropped += 1;
+                continue;
+            }
+            let face = (world[b as usize] - world[a as usize])
+                .cross(world[c as usize] - world[a as usize]);
+            // pbrt turns the geometric normal towards the shading normal when there is one.
+            let flip = match &world_normals {
+                Some(n) => face.dot(n[a as usize] + n[b as usize] + n[c as usize]) < 0.0,
+                None => flip_all,
+            };
+            kept.push(if flip { [a, c, b] } else { [a, b, c] });
+        }
+        if kept.is_empty() {
+            return Err(item
+                .at
+                .error("Shape", "the mesh has no triangle with an area"));
+        }
+        Ok(Geometry::Triangles(TriangleMesh {
+            positions: world,
+            normals: world_normals,
+            triangles: kept,
+            material: 0,
+        }))
+    }
+}
+
+/// Marks parameters dpm reads past on purpose (texture coordinates, tangents).
+fn ignore(item: &Item, names: &[&str]) {
+    for name in names {
+        item.params.mark_used(name);
+    }
+}
+
+fn corner_indices(
+    item: &Item,
+    indices: &[i64],
+    vertex_count: usize,
+) -> Result<Vec<u32>, SceneError> {
+    indices
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| {
+            if i >= 0 && (i as usize) < vertex_count {
+                Ok(i as u32)
+            } else {
+                Err(value_error(
+                    item,
+                    "Shape",
+                    "indices",
+                    format!("index {k} is {i}, not one of the {vertex_count} points"),
+                ))
+            }
+        })
+        .collect()
+}
+
+fn corner_triples(
+    item: &Item,
+    indices: &[i64],
+    vertex_count: usize,
+) -> Result<Vec<[u32; 3]>, SceneError> {
+    let corners = corner_indices(item, indices, vertex_count)?;
+    Ok(corners
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect())
+}

@@ -1,0 +1,453 @@
+//! pbrt parameter lists: `"type name" value` or `"type name" [values]`, with every type the
+//! format has. Owns reading a list and typed access to it; each access marks the parameter as
+//! used, so what the mapping never read can be reported as ignored. Must not know what a
+//! directive means.
+
+use super::lexer::{Token, TokenKind};
+use glam::Vec3;
+use std::cell::Cell;
+
+/// A parameter's value as written.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) enum Value {
+    Number(String),
+    Str(String),
+    Bool(bool),
+}
+
+#[derive(Debug)]
+pub(super) struct Param {
+    pub ty: String,
+    pub name: String,
+    pub values: Vec<Value>,
+    pub line: usize,
+    pub column: usize,
+    used: Cell<bool>,
+}
+
+/// Where in the file a problem is, and what.
+#[derive(Debug, PartialEq)]
+pub(super) struct ParamError {
+    pub line: usize,
+    pub column: usize,
+    /// `"type name"` as written.
+    pub field: String,
+    pub message: String,
+}
+
+#[derive(Debug, Default)]
+pub(super) struct ParamList {
+    pub params: Vec<Param>,
+}
+
+const KNOWN_TYPES: &[&str] = &[
+    "float",
+    "integer",
+    "bool",
+    "string",
+    "point",
+    "point2",
+    "point3",
+    "vector",
+    "vector2",
+    "vector3",
+    "normal",
+    "normal3",
+    "rgb",
+    "color",
+    "spectrum",
+    "blackbody",
+    "texture",
+];
+
+impl Param {
+    fn error(&self, message: impl Into<String>) -> ParamError {
+        ParamError {
+            line: self.line,
+            column: self.column,
+            field: format!("\"{} {}\"", self.ty, self.name),
+            message: message.into(),
+        }
+    }
+
+    fn numbers(&self) -> Result<Vec<f32>, ParamError> {
+        self.values
+            .iter()
+            .map(|v| match v {
+                Value::Number(text) => match text.parse::<f32>() {
+                    Ok(x) if x.is_finite() => Ok(x),
+                    Ok(_) => Err(self.error(format!("{text} is not a finite number"))),
+                    Err(_) => Err(self.error(format!("`{text}` is not a number"))),
+                },
+                other => Err(self.error(format!("expected numbers, found {}", describe(other)))),
+            })
+            .collect()
+    }
+
+    fn integers(&self) -> Result<Vec<i64>, ParamError> {
+        self.values
+            .iter()
+            .map(|v| match v {
+                Value::Number(text) => text
+                    .parse::<i64>()
+                    .map_err(|_| self.error(format!("`{text}` is not an integer"))),
+                other => Err(self.error(format!("expected integers, found {}", describe(other)))),
+            })
+            .collect()
+    }
+}
+
+fn describe(v: &Value) -> String {
+    match v {
+        Value::Number(n) => format!("the number {n}"),
+        Value::Str(s) => format!("the string \"{s}\""),
+        Value::Bool(b) => format!("the word {b}"),
+    }
+}
+
+impl ParamList {
+    /// Reads parameters from `tokens[*at..]` until the next token that cannot start one.
+    pub fn read(tokens: &[Token], at: &mut usize) -> Result<ParamList, ParamError> {
+        let mut list = ParamList::default();
+        while let Some(Token {
+            kind: TokenKind::Str(decl),
+            line,
+            column,
+        }) = tokens.get(*at)
+        {
+            let mut words = decl.split_whitespace();
+            let (Some(ty), Some(name), None) = (words.next(), words.next(), words.next()) else {
+                // A lone string after a directive's own arguments is not a parameter: the
+                // caller reports it as a stray token.
+                break;
+            };
+            let error = |message: String| ParamError {
+                line: *line,
+                column: *column,
+                field: format!("\"{decl}\""),
+                message,
+            };
+            if !KNOWN_TYPES.contains(&ty) {
+                return Err(error(format!("`{ty}` is not a pbrt parameter type")));
+            }
+            if list.params.iter().any(|p| p.name == name) {
+                return Err(error(format!("parameter `{name}` is given twice")));
+            }
+            *at += 1;
+            let mut values = Vec::new();
+            match tokens.get(*at).map(|t| &t.kind) {
+                Some(TokenKind::Open) => {
+                    *at += 1;
+                    loop {
+                        let Some(t) = tokens.get(*at) else {
+                            return Err(error("the value list `[` is never closed".into()));
+                        };
+                        *at += 1;
+                        match &t.kind {
+                            TokenKind::Close => break,
+                            kind => values.push(value(kind).ok_or_else(|| ParamError {
+                                line: t.line,
+                                column: t.column,
+                                field: format!("\"{decl}\""),
+                                message: format!("unexpected {} in a value list", show(kind)),
+                            })?),
+                        }
+                    }
+                }
+                Some(kind) => match value(kind) {
+                    Some(v) => {
+                        values.push(v);
+                        *at += 1;
+                    }
+                    None => return Err(error("has no value".into())),
+                },
+                None => return Err(error("has no value".into())),
+            }
+            if values.is_empty() {
+                return Err(error("has an empty value list".into()));
+            }
+            list.params.push(Param {
+                ty: ty.into(),
+                name: name.into(),
+                values,
+                line: *line,
+                column: *column,
+                used: Cell::new(false),
+            });
+        }
+        Ok(list)
+    }
+
+    fn find(&self, name: &str) -> Option<&Param> {
+        let p = self.params.iter().find(|p| p.name == name)?;
+        p.used.set(true);
+        Some(p)
+    }
+
+    /// Checks `p`'s declared type is one of `types`; a texture gets its own message.
+    fn typed<'a>(&self, p: &'a Param, types: &[&str]) -> Result<&'a Param, ParamError> {
+        if types.contains(&p.ty.as_str()) {
+            return Ok(p);
+        }
+        if p.ty == "texture" {
+            return Err(p.error("textures are not supported: give a constant value"));
+        }
+        Err(p.error(format!("must be of type {}", types.join(" or "))))
+    }
+
+    pub fn floats(&self, name: &str) -> Result<Option<Vec<f32>>, ParamError> {
+        self.find(name)
+            .map(|p| self.typed(p, &["float"])?.numbers())
+            .transpose()
+    }
+
+    pub fn float(&self, name: &str) -> Result<Option<f32>, ParamError> {
+        self.one(name, &["float"], |p| Ok(p.numbers()?[0]))
+    }
+
+    pub fn integers(&self, name: &str) -> Result<Option<Vec<i64>>, ParamError> {
+        self.find(name)
+            .map(|p| self.typed(p, &["integer"])?.integers())
+            .transpose()
+    }
+
+    pub fn integer(&self, name: &str) -> Result<Option<i64>, ParamError> {
+        self.one(name, &["integer"], |p| Ok(p.integers()?[0]))
+    }
+
+    pub fn string(&self, name: &str) -> Result<Option<String>, ParamError> {
+        self.one(name, &["string"], |p| match &p.values[0] {
+            Value::Str(s) => Ok(s.clone()),
+            other => Err(p.error(format!("expected a string, found {}", describe(other)))),
+        })
+    }
+
+    pub fn bool(&self, name: &str) -> Result<Option<bool>, ParamError> {
+        self.one(name, &["bool"], |p| match &p.values[0] {
+            Value::Bool(b) => Ok(*b),
+            Value::Str(s) if s == "true" => Ok(true),
+            Value::Str(s) if s == "false" => Ok(false),
+            other => Err(p.error(format!("expected true or false, found {}", describe(other)))),
+        })
+    }
+
+    /// Triples of a point, vector or normal type.
+    pub fn vec3s(&self, name: &str) -> Result<Option<Vec<Vec3>>, ParamError> {
+        let types = [
+            "point", "point3", "vector", "vector3", "normal", "normal3", "float",
+        ];
+        self.find(name)
+            .map(|p| {
+                let xs = self.typed(p, &types)?.numbers()?;
+                if xs.len() % 3 != 0 {
+                    return Err(p.error(format!("has {} numbers, not a multiple of 3", xs.len())));
+                }
+                Ok(xs
+                    .chunks_exact(3)
+                    .map(|c| Vec3::new(c[0], c[1], c[2]))
+                    .collect())
+            })
+            .transpose()
+    }
+
+    pub fn vec3(&self, name: &str) -> Result<Option<Vec3>, ParamError> {
+        match self.vec3s(name)? {
+            None => Ok(None),
+            Some(v) if v.len() == 1 => Ok(Some(v[0])),
+            Some(_) => Err(self.single_value_error(name, "3 numbers")),
+        }
+    }
+
+    /// A constant colour: `rgb`/`color` triples, a `spectrum` given as one constant (a
+    /// single number, or (λ, value) pairs that all have the same value), or a `float`.
+    /// Spectra by name or that vary with λ, blackbodies and textures are refused.
+    pub fn colour(&self, name: &str) -> Result<Option<Vec3>, ParamError> {
+        let types = ["rgb", "color", "spectrum", "float", "blackbody"];
+        let Some(p) = self.find(name) else {
+            return Ok(None);
+        };
+        let p = self.typed(p, &types)?;
+        match p.ty.as_str() {
+            "rgb" | "color" => {
+                let xs = p.numbers()?;
+                match xs[..] {
+                    [r, g, b] => Ok(Some(Vec3::new(r, g, b))),
+                    _ => Err(p.error(format!("has {} numbers; an RGB has 3", xs.len()))),
+                }
+            }
+            "float" => match p.numbers()?[..] {
+                [x] => Ok(Some(Vec3::splat(x))),
+                ref xs => Err(p.error(format!("has {} numbers; expected 1", xs.len()))),
+            },
+            "spectrum" => {
+                if let Value::Str(s) = &p.values[0] {
+                    return Err(p.error(format!(
+                        "the named or file spectrum \"{s}\" is not supported: give a constant"
+                    )));
+                }
+                let xs = p.numbers()?;
+                match xs[..] {
+                    [x] => Ok(Some(Vec3::splat(x))),
+                    _ if xs.len() % 2 == 0 => {
+                        let v = xs[1];
+                        if xs.chunks_exact(2).all(|pair| pair[1] == v) {
+                            Ok(Some(Vec3::splat(v)))
+                        } else {
+                            Err(p.error("a spectrum that varies with wavelength is not supported: give an rgb value"))
+                        }
+                    }
+                    _ => Err(p.error("a spectrum is one constant or (wavelength, value) pairs")),
+                }
+            }
+            _ => Err(p.error(
+                "blackbody emission is not supported: give an rgb value (pbrt's manual lists \
+                 the RGB of common colour temperatures)",
+            )),
+        }
+    }
+
+    /// The named spectrum a `spectrum` parameter gives as a string, if it is one.
+    pub fn spectrum_name(&self, name: &str) -> Option<String> {
+        let p = self.params.iter().find(|p| p.name == name)?;
+        match (&p.ty[..], &p.values[..]) {
+            ("spectrum", [Value::Str(s)]) => {
+                p.used.set(true);
+                Some(s.clone())
+            }
+            _ => None,
+        }
+    }
+
+    /// Marks `name` as read on purpose without using its value.
+    pub fn mark_used(&self, name: &str) {
+        if let Some(p) = self.params.iter().find(|p| p.name == name) {
+            p.used.set(true);
+        }
+    }
+
+    /// The parameters in this list that no accessor read, for warnings.
+    pub fn unused(&self) -> Vec<String> {
+        self.params
+            .iter()
+            .filter(|p| !p.used.get())
+            .map(|p| format!("\"{} {}\"", p.ty, p.name))
+            .collect()
+    }
+
+    /// Location of parameter `name`, or `None`.
+    pub fn at(&self, name: &str) -> Option<(usize, usize)> {
+        let p = self.params.iter().find(|p| p.name == name)?;
+        Some((p.line, p.column))
+    }
+
+    /// An error placed at parameter `name`.
+    pub fn error_at(&self, name: &str, message: impl Into<String>) -> Option<ParamError> {
+        let p = self.params.iter().find(|p| p.name == name)?;
+        Some(p.error(message))
+    }
+
+    fn single_value_error(&self, name: &str, what: &str) -> ParamError {
+        self.error_at(name, format!("must be exactly {what}"))
+            .expect("called for a parameter that exists")
+    }
+
+    fn one<T>(
+        &self,
+        name: &str,
+        types: &[&str],
+        read: impl FnOnce(&Param) -> Result<T, ParamError>,
+    ) -> Result<Option<T>, ParamError> {
+        let Some(p) = self.find(name) else {
+            return Ok(None);
+        };
+        let p = self.typed(p, types)?;
+        if p.values.len() != 1 {
+            return Err(p.error(format!("has {} values; expected one", p.values.len())));
+        }
+        read(p).map(Some)
+    }
+}
+
+fn value(kind: &TokenKind) -> Option<Value> {
+    match kind {
+        TokenKind::Number(n) => Some(Value::Number(n.clone())),
+        TokenKind::Str(s) => Some(Value::Str(s.clone())),
+        TokenKind::Word(w) if w == "true" => Some(Value::Bool(true)),
+        TokenKind::Word(w) if w == "false" => Some(Value::Bool(false)),
+        _ => None,
+    }
+}
+
+pub(super) fn show(kind: &TokenKind) -> String {
+    match kind {
+        TokenKind::Str(s) => format!("string \"{s}\""),
+        TokenKind::Number(n) => format!("number {n}"),
+        TokenKind::Word(w) => format!("`{w}`"),
+        TokenKind::Open => "`[`".into(),
+        TokenKind::Close => "`]`".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::lexer::tokens;
+    use super::*;
+
+    fn list(text: &str) -> Result<ParamList, ParamError> {
+        let t = tokens(text).unwrap();
+        let mut at = 0;
+        let list = ParamList::read(&t, &mut at)?;
+        assert_eq!(at, t.len(), "every token read");
+        Ok(list)
+    }
+
+    #[test]
+    fn reads_every_value_form() {
+        let l = list(
+            r#""float radius" 2 "rgb Kd" [0.1 0.2 0.3] "bool twosided" true
+               "string filename" ["a.ply"] "point3 P" [0 0 0 1 0 0 0 1 0]
+               "integer indices" [0 1 2] "spectrum Kr" [300 0.5 800 0.5]"#,
+        )
+        .unwrap();
+        assert_eq!(l.float("radius").unwrap(), Some(2.0));
+        assert_eq!(l.colour("Kd").unwrap(), Some(Vec3::new(0.1, 0.2, 0.3)));
+        assert_eq!(l.bool("twosided").unwrap(), Some(true));
+        assert_eq!(l.string("filename").unwrap().as_deref(), Some("a.ply"));
+        assert_eq!(l.vec3s("P").unwrap().unwrap().len(), 3);
+        assert_eq!(l.integers("indices").unwrap(), Some(vec![0, 1, 2]));
+        assert_eq!(l.colour("Kr").unwrap(), Some(Vec3::splat(0.5)));
+        assert!(l.unused().is_empty());
+        assert_eq!(l.float("absent").unwrap(), None);
+    }
+
+    #[test]
+    fn refuses_what_it_cannot_represent_at_the_parameter() {
+        let l = list(r#""texture Kd" "checks" "blackbody I" [5500] "spectrum eta" "metal-Cu-eta""#)
+            .unwrap();
+        let e = l.colour("Kd").unwrap_err();
+        assert!(e.message.contains("textures"), "{e:?}");
+        assert_eq!((e.line, e.column), (1, 1));
+        assert!(l.colour("I").unwrap_err().message.contains("blackbody"));
+        assert!(l.colour("eta").unwrap_err().message.contains("named"));
+        assert_eq!(l.spectrum_name("eta").as_deref(), Some("metal-Cu-eta"));
+    }
+
+    #[test]
+    fn malformed_lists_are_errors_with_places() {
+        for (text, needle) in [
+            (r#""float radius" [1"#, "never closed"),
+            (r#""float radius""#, "no value"),
+            (r#""float radius" []"#, "empty"),
+            (r#""float3 radius" 1"#, "not a pbrt parameter type"),
+            (r#""float r" 1 "float r" 2"#, "twice"),
+            (r#""float r" [1 Shape]"#, "unexpected"),
+        ] {
+            let e = list(text).unwrap_err();
+            assert!(e.message.contains(needle), "{text}: {e:?}");
+        }
+        let l = list(r#""float r" [-inf] "integer n" 2.5 "rgb c" [1 2]"#).unwrap();
+        assert!(l.float("r").unwrap_err().message.contains("finite"));
+        assert!(l.integer("n").unwrap_err().message.contains("integer"));
+        assert!(l.colour("c").unwrap_err().message.contains("3"));
+    }
+}

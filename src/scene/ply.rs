@@ -1,0 +1,779 @@
+//! PLY meshes (ASCII, binary little- and big-endian): vertex positions, optional vertex
+//! normals, and faces of three or four corners (quads split in two). Owns the file format and
+//! its errors; the caller places the mesh in the world. A count in the header is checked
+//! against the bytes (or lines) the file really has before anything is allocated for it, so a
+//! header that claims 10¹² vertices is refused, not obeyed. Must not know scenes or Embree.
+
+use glam::Vec3;
+use std::path::Path;
+
+/// A mesh as the file gives it, in the file's own coordinates.
+#[derive(Debug, Default, PartialEq)]
+pub(crate) struct PlyMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// What went wrong, and where: a header line, or an element of the body.
+#[derive(Debug, PartialEq)]
+pub(crate) struct PlyError {
+    /// 1-based line (header lines, and body lines of an ASCII file).
+    pub line: Option<usize>,
+    /// The header line or element named, e.g. `element vertex` or `face[12]`.
+    pub field: String,
+    pub message: String,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Encoding {
+    Ascii,
+    Little,
+    Big,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(name: &str) -> Option<Scalar> {
+        Some(match name {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_integer(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+#[derive(Debug)]
+enum Property {
+    Scalar {
+        name: String,
+        ty: Scalar,
+    },
+    List {
+        name: String,
+        count: Scalar,
+        item: Scalar,
+    },
+}
+
+impl Property {
+    fn name(&self) -> &str {
+        match self {
+            Property::Scalar { name, .. } | Property::List { name, .. } => name,
+        }
+    }
+
+    /// The fewest bytes one value of this property takes in a binary file.
+    fn min_size(&self) -> usize {
+        match self {
+            Property::Scalar { ty, .. } => ty.size(),
+            Property::List { count, .. } => count.size(),
+        }
+    }
+}
+
+#[derive(Debug)]
+struct Element {
+    name: String,
+    count: usize,
+    properties: Vec<Property>,
+    line: usize,
+}
+
+/// Vertex indices above this do not fit the u32 triangles (and no real file has them).
+const MAX_VERTICES: usize = u32::MAX as usize;
+
+pub(crate) fn read(path: &Path) -> Result<PlyMesh, PlyError> {
+    let bytes = std::fs::read(path).map_err(|err| PlyError {
+        line: None,
+        field: "file".into(),
+        message: format!("cannot read: {err}"),
+    })?;
+    parse(&bytes)
+}
+
+pub(crate) fn parse(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
+    let (encoding, elements, body_start, header_lines) = header(bytes)?;
+    let body = &bytes[body_start..];
+    let mut reader = match encoding {
+        Encoding::Ascii => Body::Ascii(AsciiBody::new(body, header_lines)?),
+        Encoding::Little | Encoding::Big => Body::Binary {
+            bytes: body,
+            at: 0,
+            big: encoding == Encoding::Big,
+        },
+    };
+    reader.check_counts(&elements)?;
+
+    let mut mesh = PlyMesh::default();
+    let mut vertex_count = None;
+    for element in &elements {
+        match element.name.as_str() {
+            "vertex" => {
+                vertex_count = Some(element.count);
+                read_vertices(&mut reader, element, &mut mesh)?;
+            }
+            "face" => {
+                let Some(vertices) = vertex_count else {
+                    return Err(PlyError {
+                        line: Some(element.line),
+                        field: "element face".into(),
+                        message: "faces come before any vertices".into(),
+                    });
+                };
+                read_faces(&mut reader, element, vertices, &mut mesh)?;
+            }
+            _ => {
+                for i in 0..element.count {
+                    reader.begin(&element.name, i)?;
+                    for p in &element.properties {
+                        reader.skip(p, &element.name, i)?;
+                    }
+                    reader.end(&element.name, i)?;
+                }
+            }
+        }
+    }
+    if vertex_count.is_none() {
+        return Err(PlyError {
+            line: None,
+            field: "header".into(),
+            message: "has no `element vertex`".into(),
+        });
+    }
+    Ok(mesh)
+}
+
+fn header_error(line: usize, field: &str, message: impl Into<String>) -> PlyError {
+    PlyError {
+        line: Some(line),
+        field: field.into(),
+        message: message.into(),
+    }
+}
+
+/// Reads the header; returns the encoding, the elements, where the body starts and how many
+/// lines the header has.
+fn header(bytes: &[u8]) -> Result<(Encoding, Vec<Element>, usize, usize), PlyError> {
+    let mut at = 0;
+    let mut line_no = 0;
+    let mut encoding = None;
+    let mut elements: Vec<Element> = Vec::new();
+    loop {
+        let Some(len) = bytes[at..].iter().position(|&b| b == b'\n') else {
+            return Err(header_error(
+                line_no + 1,
+                "header",
+                "ends before `end_header`",
+            ));
+        };
+        line_no += 1;
+        let raw = &bytes[at..at + len];
+        at += len + 1;
+        let Ok(text) = std::str::from_utf8(raw) else {
+            return Err(header_error(line_no, "header", "is not ASCII text"));
+        };
+        let text = text.trim_end_matches('\r');
+        let words: Vec<&str> = text.split_whitespace().collect();
+        if line_no == 1 {
+            if text.trim() != "ply" {
+                return Err(header_error(
+                    1,
+                    "magic",
+                    "the file does not start with `ply`",
+                ));
+            }
+            continue;
+        }
+        match words.as_slice() {
+            [] => {}
+            ["comment", ..] | ["obj_info", ..] => {}
+            ["format", kind, version] => {
+                if *version != "1.0" {
+                    return Err(header_error(
+                        line_no,
+                        "format",
+                        format!("version {version} is not 1.0"),
+                    ));
+                }
+                encoding = Some(match *kind {
+                    "ascii" => Encoding::Ascii,
+                    "binary_little_endian" => Encoding::Little,
+                    "binary_big_endian" => Encoding::Big,
+                    other => {
+                        return Err(header_error(
+                            line_no,
+                            "format",
+                            format!(
+                                "`{other}` is not ascii, binary_little_endian or binary_big_endian"
+                            ),
+                        ));
+                    }
+                });
+            }
+            ["element", name, count] => {
+                let field = format!("element {name}");
+                let count: usize = count.parse().map_err(|_| {
+                    header_error(
+                        line_no,
+                        &field,
+                        format!("count `{count}` is not a whole number"),
+                    )
+                })?;
+                if elements.iter().any(|e| e.name == *name) {
+                    return Err(header_error(line_no, &field, "is declared twice"));
+                }
+                elements.push(Element {
+                    name: (*name).into(),
+                    count,
+                    properties: Vec::new(),
+                    line: line_no,
+                });
+            }
+            ["property", rest @ ..] => {
+                let Some(element) = elements.last_mut() else {
+                    return Err(header_error(
+                        line_no,
+                        "property",
+                        "comes before any element",
+                    ));
+                };
+                let field = format!("element {} property", element.name);
+                let scalar = |name: &str| {
+                    Scalar::parse(name).ok_or_else(|| {
+                        header_error(line_no, &field, format!("`{name}` is not a PLY type"))
+                    })
+                };
+                let property = match rest {
+                    ["list", count, item, name] => {
+                        let count = scalar(count)?;
+                        if !count.is_integer() {
+                            return Err(header_error(
+                                line_no,
+                                &field,
+                                "a list's count type must be an integer type",
+                            ));
+                        }
+                        Property::List {
+                            name: (*name).into(),
+                            count,
+                            item: scalar(item)?,
+                        }
+                    }
+                    [ty, name] => Property::Scalar {
+                        name: (*name).into(),
+                        ty: scalar(ty)?,
+                    },
+                    _ => return Err(header_error(line_no, &field, "is malformed")),
+                };
+                if element
+                    .properties
+                    .iter()
+                    .any(|p| p.name() == property.name())
+                {
+                    return Err(header_error(line_no, &field, "is declared twice"));
+                }
+                element.properties.push(property);
+            }
+            ["end_header"] => break,
+            [word, ..] => {
+                return Err(header_error(
+                    line_no,
+                    "header",
+                    format!("`{word}` is not a PLY header keyword"),
+                ));
+            }
+        }
+    }
+    let encoding = encoding.ok_or_else(|| header_error(line_no, "format", "is missing"))?;
+    Ok((encoding, elements, at, line_no))
+}
+
+/// The position (x, y, z) and normal (nx, ny, nz) properties of `vertex`, by index.
+fn vertex_layout(element: &Element) -> Result<([usize; 3], Option<[usize; 3]>), PlyError> {
+    let index = |name: &str| {
+        element
+            .properties
+            .iter()
+            .position(|p| p.name() == name && matches!(p, Property::Scalar { .. }))
+    };
+    let position = ["x", "y", "z"].map(index);
+    let [Some(x), Some(y), Some(z)] = position else {
+        return Err(header_error(
+            element.line,
+            "element vertex",
+            "needs scalar properties x, y and z",
+        ));
+    };
+    let normal = match ["nx", "ny", "nz"].map(index) {
+        [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+        [None, None, None] => None,
+        _ => {
+            return Err(header_error(
+                element.line,
+                "element vertex",
+                "has some of nx, ny, nz but not all three",
+            ));
+        }
+    };
+    Ok(([x, y, z], normal))
+}
+
+fn read_vertices(reader: &mut Body, element: &Element, mesh: &mut PlyMesh) -> Result<(), PlyError> {
+    if element.count > MAX_VERTICES {
+        return Err(header_error(
+            element.line,
+            "element vertex",
+            "has more vertices than u32 indices can name",
+        ));
+    }
+    let (position, normal) = vertex_layout(element)?;
+    mesh.positions.reserve(element.count);
+    let mut normals = normal.map(|_| Vec::with_capacity(element.count));
+    let mut values = vec![0.0f64; element.properties.len()];
+    for i in 0..element.count {
+        reader.begin("vertex", i)?;
+        for (slot, p) in element.properties.iter().enumerate() {
+            match p {
+                Property::Scalar { ty, .. } => values[slot] = reader.scalar(*ty, "vertex", i)?,
+                list => reader.skip(list, "vertex", i)?,
+            }
+        }
+        reader.end("vertex", i)?;
+        let v =
+            |[a, b, c]: [usize; 3]| Vec3::new(values[a] as f32, values[b] as f32, values[c] as f32);
+        let p = v(position);
+        if !p.is_finite() {
+            return Err(element_error(reader, "vertex", i, "position is not finite"));
+        }
+        mesh.positions.push(p);
+        if let (Some(normals), Some(layout)) = (normals.as_mut(), normal) {
+            let n = v(layout);
+            if !n.is_finite() {
+                return Err(element_error(reader, "vertex", i, "normal is not finite"));
+            }
+            normals.push(n);
+        }
+    }
+    mesh.normals = normals;
+    Ok(())
+}
+
+fn read_faces(
+    reader: &mut Body,
+    element: &Element,
+    vertex_count: usize,
+    mesh: &mut PlyMesh,
+) -> Result<(), PlyError> {
+    let corners_at = element
+        .properties
+        .iter()
+        .position(|p| {
+            matches!(p, Property::List { name, .. } if name == "vertex_indices" || name == "vertex_index")
+        })
+        .ok_or_else(|| {
+            header_error(
+                element.line,
+                "element face",
+                "needs a list property vertex_indices (or vertex_index)",
+            )
+        })?;
+    mesh.triangles.reserve(element.count);
+    for i in 0..element.count {
+        reader.begin("face", i)?;
+        let mut corners = [0u32; 4];
+        let mut n = 0;
+        for (slot, p) in element.properties.iter().enumerate() {
+            match p {
+                Property::List { count, item, .. } if slot == corners_at => {
+                    let k = reader.scalar(*count, "face", i)?;
+                    if k != 3.0 && k != 4.0 {
+                        return Err(element_error(
+                            reader,
+                            "face",
+                            i,
+                            format!("has {k} corners; only triangles and quads are read"),
+                        ));
+                    }
+                    n = k as usize;
+                    for corner in corners.iter_mut().take(n) {
+                        let v = reader.scalar(*item, "face", i)?;
+                        if !(v >= 0.0 && v.fract() == 0.0 && (v as usize) < vertex_count) {
+                            return Err(element_error(
+                                reader,
+                                "face",
+                                i,
+                                format!(
+                                    "vertex index {v} is not one of the {vertex_count} vertices"
+                                ),
+                            ));
+                        }
+                        *corner = v as u32;
+                    }
+                }
+                other => reader.skip(other, "face", i)?,
+            }
+        }
+        reader.end("face", i)?;
+        let [a, b, c, d] = corners;
+        mesh.triangles.push([a, b, c]);
+        if n == 4 {
+            mesh.triangles.push([a, c, d]);
+        }
+    }
+    Ok(())
+}
+
+fn element_error(reader: &Body, element: &str, i: usize, message: impl Into<String>) -> PlyError {
+    PlyError {
+        line: reader.line(),
+        field: format!("{element}[{i}]"),
+        message: message.into(),
+    }
+}
+
+enum Body<'a> {
+    Ascii(AsciiBody<'a>),
+    Binary {
+        bytes: &'a [u8],
+        at: usize,
+        big: bool,
+    },
+}
+
+/// An ASCII body: one element instance per line.
+struct AsciiBody<'a> {
+    lines: Vec<&'a str>,
+    first_line: usize,
+    /// Index of the current line in `lines`, and of the next word in it.
+    line: usize,
+    words: Vec<&'a str>,
+    word: usize,
+}
+
+impl<'a> AsciiBody<'a> {
+    fn new(body: &'a [u8], header_lines: usize) -> Result<Self, PlyError> {
+        let text = std::str::from_utf8(body).map_err(|e| PlyError {
+            line: Some(
+                header_lines
+                    + 1
+                    + body[..e.valid_up_to()]
+                        .iter()
+                        .filter(|&&b| b == b'\n')
+                        .count(),
+            ),
+            field: "body".into(),
+            message: "an ASCII PLY body is not text".into(),
+        })?;
+        Ok(AsciiBody {
+            lines: text.lines().collect(),
+            first_line: header_lines + 1,
+            line: 0,
+            words: Vec::new(),
+            word: 0,
+        })
+    }
+}
+
+impl Body<'_> {
+    fn line(&self) -> Option<usize> {
+        match self {
+            Body::Ascii(a) => Some(a.first_line + a.line.saturating_sub(1)),
+            Body::Binary { .. } => None,
+        }
+    }
+
+    /// Refuses counts the file cannot hold, before anything is allocated for them.
+    fn check_counts(&self, elements: &[Element]) -> Result<(), PlyError> {
+        let available = match self {
+            Body::Ascii(a) => a.lines.iter().filter(|l| !l.trim().is_empty()).count(),
+            Body::Binary { bytes, .. } => bytes.len(),
+        };
+        let mut needed: usize = 0;
+        for e in elements {
+            let per = match self {
+                Body::Ascii(_) => 1,
+                Body::Binary { .. } => e
+                    .properties
+                    .iter()
+                    .map(Property::min_size)
+                    .sum::<usize>()
+                    .max(1),
+            };
+            needed = needed.saturating_add(e.count.saturating_mul(per));
+            if needed > available {
+                let unit = if matches!(self, Body::Ascii(_)) {
+                    "lines"
+                } else {
+                    "bytes"
+                };
+                return Err(header_error(
+                    e.line,
+                    &format!("element {}", e.name),
+                    format!(
+                        "claims {} elements, but the file has only {available} {unit} of body for every element up to this one (truncated or a wrong count)",
+                        e.count
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn begin(&mut self, element: &str, i: usize) -> Result<(), PlyError> {
+        if let Body::Ascii(a) = self {
+            loop {
+                let Some(text) = a.lines.get(a.line) else {
+                    return Err(PlyError {
+                        line: Some(a.first_line + a.line),
+                        field: format!("{element}[{i}]"),
+                        message: "the file ends before this element".into(),
+                    });
+                };
+                a.line += 1;
+                a.words = text.split_whitespace().collect();
+                a.word = 0;
+                if !a.words.is_empty() {
+                    return Ok(());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn end(&mut self, element: &str, i: usize) -> Result<(), PlyError> {
+        if let Body::Ascii(a) = self
+            && a.word != a.words.len()
+        {
+            return Err(PlyError {
+                line: Some(a.first_line + a.line - 1),
+                field: format!("{element}[{i}]"),
+                message: format!(
+                    "has {} values; its properties take {}",
+                    a.words.len(),
+                    a.word
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    fn scalar(&mut self, ty: Scalar, element: &str, i: usize) -> Result<f64, PlyError> {
+        let field = || format!("{element}[{i}]");
+        match self {
+            Body::Ascii(a) => {
+                let line = Some(a.first_line + a.line - 1);
+                let Some(word) = a.words.get(a.word) else {
+                    return Err(PlyError {
+                        line,
+                        field: field(),
+                        message: "has too few values for its properties".into(),
+                    });
+                };
+                a.word += 1;
+                let bad = || PlyError {
+                    line,
+                    field: field(),
+                    message: format!("`{word}` is not a {ty:?} value"),
+                };
+                if ty.is_integer() {
+                    word.parse::<i64>().map(|v| v as f64).map_err(|_| bad())
+                } else {
+                    word.parse::<f64>().map_err(|_| bad())
+                }
+            }
+            Body::Binary { bytes, at, big } => {
+                let size = ty.size();
+                let Some(raw) = bytes.get(*at..*at + size) else {
+                    return Err(PlyError {
+                        line: None,
+                        field: field(),
+                        message: format!("the file ends inside this element (byte {})", *at),
+                    });
+                };
+                *at += size;
+                let mut b = [0u8; 8];
+                b[..size].copy_from_slice(raw);
+                if *big {
+                    b[..size].reverse();
+                }
+                Ok(match ty {
+                    Scalar::I8 => b[0] as i8 as f64,
+                    Scalar::U8 => b[0] as f64,
+                    Scalar::I16 => i16::from_le_bytes([b[0], b[1]]) as f64,
+                    Scalar::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
+                    Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                    Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                    Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                    Scalar::F64 => f64::from_le_bytes(b),
+                })
+            }
+        }
+    }
+
+    fn skip(&mut self, p: &Property, element: &str, i: usize) -> Result<(), PlyError> {
+        match p {
+            Property::Scalar { ty, .. } => self.scalar(*ty, element, i).map(drop),
+            Property::List { count, item, .. } => {
+                let n = self.scalar(*count, element, i)?;
+                if n < 0.0 {
+                    return Err(PlyError {
+                        line: self.line(),
+                        field: format!("{element}[{i}]"),
+                        message: format!("a list has a negative length {n}"),
+                    });
+                }
+                for _ in 0..n as usize {
+                    self.scalar(*item, element, i)?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ASCII_QUAD: &str = "ply\nformat ascii 1.0\ncomment a unit square\nelement vertex 4\n\
+        property float x\nproperty float y\nproperty float z\nelement face 1\n\
+        property list uchar int vertex_indices\nend_header\n\
+        0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+
+    fn binary(big: bool) -> Vec<u8> {
+        let format = if big {
+            "binary_big_endian"
+        } else {
+            "binary_little_endian"
+        };
+        let mut b = format!(
+            "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+             property float z\nproperty float nx\nproperty float ny\nproperty float nz\n\
+             element face 1\nproperty list uchar uint vertex_indices\nend_header\n"
+        )
+        .into_bytes();
+        let f = |x: f32| {
+            if big {
+                x.to_be_bytes()
+            } else {
+                x.to_le_bytes()
+            }
+        };
+        for p in [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+            for x in p.into_iter().chain([0.0, 0.0, 1.0]) {
+                b.extend(f(x));
+            }
+        }
+        b.push(3);
+        for i in [0u32, 1, 2] {
+            b.extend(if big {
+                i.to_be_bytes()
+            } else {
+                i.to_le_bytes()
+            });
+        }
+        b
+    }
+
+    #[test]
+    fn an_ascii_quad_becomes_two_triangles() {
+        let m = parse(ASCII_QUAD.as_bytes()).unwrap();
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(m.normals, None);
+    }
+
+    #[test]
+    fn both_byte_orders_read_the_same_mesh() {
+        let little = parse(&binary(false)).unwrap();
+        let big = parse(&binary(true)).unwrap();
+        assert_eq!(little, big);
+        assert_eq!(little.positions[1], Vec3::X);
+        assert_eq!(little.normals.as_ref().unwrap()[2], Vec3::Z);
+        assert_eq!(little.triangles, vec![[0, 1, 2]]);
+    }
+
+    #[test]
+    fn a_truncated_binary_body_is_refused_without_reading_past_it() {
+        let full = binary(false);
+        for cut in [full.len() - 1, full.len() - 13, full.len() - 40] {
+            let err = parse(&full[..cut]).unwrap_err();
+            assert!(
+                err.message.contains("ends") || err.message.contains("claims"),
+                "cut {cut}: {err:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_huge_claimed_count_is_refused_before_allocating() {
+        let text = ASCII_QUAD.replace("element vertex 4", "element vertex 1000000000000");
+        let err = parse(text.as_bytes()).unwrap_err();
+        assert_eq!(err.line, Some(4));
+        assert!(err.message.contains("claims"), "{err:?}");
+        let mut b = binary(false);
+        let at = b.windows(9).position(|w| w == b"vertex 3\n").unwrap();
+        b.splice(at..at + 9, b"vertex 999999999999\n".iter().copied());
+        assert!(parse(&b).unwrap_err().message.contains("claims"));
+    }
+
+    #[test]
+    fn header_and_body_mistakes_name_their_line() {
+        for (from, to, line, needle) in [
+            ("ply\n", "plx\n", Some(1), "ply"),
+            ("format ascii 1.0", "format ebcdic 1.0", Some(2), "ebcdic"),
+            (
+                "property float z",
+                "property quad z",
+                Some(7),
+                "not a PLY type",
+            ),
+            ("4 0 1 2 3", "4 0 1 2 9", Some(15), "not one of the 4"),
+            (
+                "4 0 1 2 3",
+                "5 0 1 2 3 0",
+                Some(15),
+                "only triangles and quads",
+            ),
+            ("1 1 0\n", "1 1\n", Some(13), "too few"),
+            ("0 1 0\n", "0 1 0 7\n", Some(14), "values"),
+            ("end_header\n", "end_headr\n", Some(10), "keyword"),
+        ] {
+            let text = ASCII_QUAD.replace(from, to);
+            let err = parse(text.as_bytes()).unwrap_err();
+            assert_eq!(err.line, line, "{to}: {err:?}");
+            assert!(err.message.contains(needle), "{to}: {err:?}");
+        }
+    }
+}

@@ -1,0 +1,459 @@
+//! pbrt scene files: the same scene written in pbrt and in TOML renders the same image with
+//! the same seed; pbrt's transforms, camera conventions, Include/Import and materials map as
+//! pbrt defines them; every malformed pbrt or PLY file in tests/fixtures/pbrt/bad exits 2
+//! naming its file and line (and column, in a pbrt file), never panicking; and mutated pbrt
+//! files never panic the loader.
+
+mod support;
+
+use dpm::render::pipeline::{self, relative_mse};
+use dpm::scene::{self, Camera, Handedness, Light, LoadOptions, Material, Shape};
+use glam::Vec3;
+use proptest::prelude::*;
+use std::path::{Path, PathBuf};
+use support::{path_str, render_args, repo_path, scene_with_resolution, write_scene};
+
+fn render(scene: &Path, out: &Path) -> dpm::image_io::Image {
+    let args = [
+        path_str(scene),
+        "-o",
+        path_str(out),
+        "--threads",
+        "2",
+        "--caustic-photons",
+        "20000",
+        "--global-photons",
+        "20000",
+    ];
+    pipeline::run(&render_args(&args))
+        .unwrap_or_else(|e| panic!("{}: {e}", scene.display()))
+        .image
+}
+
+fn load_text(
+    dir: &Path,
+    text: &str,
+) -> Result<(scene::SceneDescription, scene::LoadReport), scene::SceneError> {
+    let path = write_scene(dir, "scene.pbrt", text);
+    scene::load_with_report(&path)
+}
+
+fn loads(text: &str) -> (scene::SceneDescription, scene::LoadReport) {
+    let dir = tempfile::tempdir().unwrap();
+    load_text(dir.path(), text).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+const CAMERA: &str = "LookAt 0 1 4  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+    Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 24\n";
+const LIGHT: &str = "LightSource \"point\" \"point from\" [0 3 0] \"rgb I\" [10 10 10]\n";
+
+fn world(body: &str) -> String {
+    format!("{CAMERA}WorldBegin\n{LIGHT}{body}WorldEnd\n")
+}
+
+fn spheres(scene: &scene::SceneDescription) -> Vec<(Vec3, f32)> {
+    scene
+        .shapes
+        .iter()
+        .filter_map(|s| match s {
+            Shape::Sphere { center, radius, .. } => Some((*center, *radius)),
+            _ => None,
+        })
+        .collect()
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).length() < 1e-5
+}
+
+#[test]
+fn the_cornell_box_in_pbrt_renders_the_toml_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = write_scene(
+        dir.path(),
+        "box.toml",
+        &scene_with_resolution("scenes/cornell-box.toml", 96, 96),
+    );
+    let pbrt_text = std::fs::read_to_string(repo_path("scenes/cornell-box.pbrt"))
+        .unwrap()
+        .replace("[512]", "[96]");
+    let pbrt = write_scene(dir.path(), "box.pbrt", &pbrt_text);
+    let a = render(&toml, &dir.path().join("a.pfm"));
+    let b = render(&pbrt, &dir.path().join("b.pfm"));
+    let e = relative_mse(&b, &a);
+    eprintln!("relative MSE, pbrt against TOML: {e:e}");
+    assert!(e <= 1e-4, "relative MSE {e}");
+}
+
+/// Writes the OBJ's mesh as a binary little-endian PLY with normals.
+fn obj_to_ply(obj: &Path, ply: &Path) {
+    let (models, _) = tobj::load_obj(
+        obj,
+        &tobj::LoadOptions {
+            single_index: true,
+            triangulate: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let m = &models[0].mesh;
+    let n = m.positions.len() / 3;
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment from {}\nelement vertex {n}\n\
+         property float x\nproperty float y\nproperty float z\nproperty float nx\n\
+         property float ny\nproperty float nz\nelement face {}\n\
+         property list uchar int vertex_indices\nend_header\n",
+        obj.display(),
+        m.indices.len() / 3
+    )
+    .into_bytes();
+    for i in 0..n {
+        for x in m.positions[3 * i..3 * i + 3]
+            .iter()
+            .chain(&m.normals[3 * i..3 * i + 3])
+        {
+            b.extend(x.to_le_bytes());
+        }
+    }
+    for t in m.indices.chunks_exact(3) {
+        b.push(3);
+        for i in t {
+            b.extend((*i as i32).to_le_bytes());
+        }
+    }
+    std::fs::write(ply, b).unwrap();
+}
+
+#[test]
+fn the_torus_knot_from_a_binary_ply_renders_the_obj_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("knot.ply");
+    obj_to_ply(&repo_path("scenes/meshes/torus-knot.obj"), &ply);
+    // scenes/torus-knot.toml: sphere light of 400 W, radius 0.05 → L = Φ / (π · 4πr²).
+    let radiance = 400.0 / (std::f64::consts::PI * 4.0 * std::f64::consts::PI * 0.05 * 0.05);
+    let text = format!(
+        "Scale -1 1 1\nLookAt 0 3.4 4.4  0 0.2 0.4  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+         Film \"image\" \"integer xresolution\" 80 \"integer yresolution\" 60\nWorldBegin\n\
+         AttributeBegin\n Translate 0.5 4.5 -1.5\n AreaLightSource \"diffuse\" \"rgb L\" [{radiance} {radiance} {radiance}]\n\
+         Shape \"sphere\" \"float radius\" 0.05\nAttributeEnd\n\
+         AttributeBegin\n Translate 0 1.1 0\n Rotate -90 1 0 0\n Material \"glass\" \"float index\" 1.5\n\
+         Shape \"plymesh\" \"string filename\" \"knot.ply\"\nAttributeEnd\n\
+         Material \"matte\" \"rgb Kd\" [0.75 0.75 0.75]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [-4 0 -4  -4 0 4  4 0 4  4 0 -4]\n\
+         WorldEnd\n"
+    );
+    let pbrt = write_scene(dir.path(), "knot.pbrt", &text);
+    let toml_text = scene_with_resolution("scenes/torus-knot.toml", 80, 60).replace(
+        "meshes/torus-knot.obj",
+        path_str(&repo_path("scenes/meshes/torus-knot.obj")),
+    );
+    let toml = write_scene(dir.path(), "knot.toml", &toml_text);
+    let a = render(&toml, &dir.path().join("a.pfm"));
+    let b = render(&pbrt, &dir.path().join("b.pfm"));
+    let e = relative_mse(&b, &a);
+    eprintln!("relative MSE, pbrt against TOML: {e:e}");
+    assert!(e <= 1e-4, "relative MSE {e}");
+}
+
+/// Each malformed file, the place its error must name (`file:line[:column]`, the file
+/// relative to tests/fixtures/pbrt/bad) and a phrase of the message.
+#[rustfmt::skip]
+const MALFORMED: &[(&str, &str, &str)] = &[
+    ("albedo-above-one", "albedo-above-one.pbrt:7:1", "outside [0, 1]"),
+    ("attribute-closed-by-transform-end", "attribute-closed-by-transform-end.pbrt:8:1", "does not match"),
+    ("blackbody-light", "blackbody-light.pbrt:7:21", "blackbody"),
+    ("film-resolution-zero", "film-resolution-zero.pbrt:3:14", "not from 1"),
+    ("include-cycle", "include-cycle.pbrt:7:1", "includes itself"),
+    ("index-out-of-range", "index-out-of-range.pbrt:7:22", "not one of the 3 points"),
+    ("indices-not-triples", "indices-not-triples.pbrt:7:22", "not a multiple of 3"),
+    ("infinite-in-parameter", "infinite-in-parameter.pbrt:7:16", "finite"),
+    ("missing-include", "missing-include.pbrt:7:1", "cannot read"),
+    ("nan-in-transform", "nan-in-transform.pbrt:7:11", "expected a number"),
+    ("negative-radius", "negative-radius.pbrt:7:16", "not > 0"),
+    ("no-lights", "no-lights.pbrt:1:1", "no light"),
+    ("normal-count-mismatch", "normal-count-mismatch.pbrt:7:53", "1 normals for 3 points"),
+    ("orthographic-camera", "orthographic-camera.pbrt:2:1", "perspective"),
+    ("partial-sphere", "partial-sphere.pbrt:7:1", "partial sphere"),
+    ("ply-huge-count", "huge-count.ply:3", "claims 1000000000000"),
+    ("ply-index-out-of-range", "index-out-of-range.ply:13", "not one of the 3 vertices"),
+    ("ply-missing-file", "ply-missing-file.pbrt:7:17", "cannot read"),
+    ("ply-not-a-ply", "not-a-ply.ply:1", "does not start with `ply`"),
+    ("ply-truncated-binary", "truncated-binary.ply", "ends inside this element"),
+    ("ply-wrong-vertex-count", "wrong-vertex-count.ply:7", "claims 1 elements"),
+    ("shape-before-world-begin", "shape-before-world-begin.pbrt:4:1", "after WorldBegin"),
+    ("stray-number", "stray-number.pbrt:7:16", "is not a parameter"),
+    ("texture-reflectance", "texture-reflectance.pbrt:8:18", "textures are not supported"),
+    ("unbalanced-attribute-end", "unbalanced-attribute-end.pbrt:7:1", "no AttributeBegin"),
+    ("unclosed-attribute-begin", "unclosed-attribute-begin.pbrt:7:1", "never closed"),
+    ("unclosed-value-list", "unclosed-value-list.pbrt:8:1", "in a value list"),
+    ("undefined-coordinate-system", "undefined-coordinate-system.pbrt:7:1", "\"lamp\""),
+    ("undefined-named-material", "undefined-named-material.pbrt:7:1", "\"gold\""),
+    ("unknown-directive", "unknown-directive.pbrt:7:1", "`Shap` is not a pbrt directive"),
+    ("unknown-material", "unknown-material.pbrt:7:1", "\"velvet\""),
+    ("unknown-parameter-type", "unknown-parameter-type.pbrt:7:16", "`flaot`"),
+    ("unterminated-string", "unterminated-string.pbrt:7:7", "string"),
+    ("zero-rotation-axis", "zero-rotation-axis.pbrt:7:1", "zero vector"),
+];
+
+#[test]
+fn every_malformed_pbrt_or_ply_file_exits_2_naming_its_place() {
+    let bad = repo_path("tests/fixtures/pbrt/bad");
+    let listed: Vec<PathBuf> = MALFORMED
+        .iter()
+        .map(|(name, ..)| bad.join(format!("{name}.pbrt")))
+        .collect();
+    let mut on_disk: Vec<PathBuf> = std::fs::read_dir(&bad)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "pbrt"))
+        .collect();
+    on_disk.sort();
+    assert_eq!(on_disk, listed, "every fixture is listed, in name order");
+    assert!(MALFORMED.len() >= 20);
+    let out_dir = tempfile::tempdir().unwrap();
+    let output = out_dir.path().join("never.png");
+    let mut failures = Vec::new();
+    for ((name, place, phrase), scene) in MALFORMED.iter().zip(&listed) {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_dpm"))
+            .args([
+                "render".as_ref(),
+                scene.as_os_str(),
+                "-o".as_ref(),
+                output.as_os_str(),
+            ])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        let want_place = format!("{}/{place}: ", bad.display());
+        if out.status.code() != Some(2)
+            || err.contains("panicked")
+            || !err.contains(&want_place)
+            || !err.contains(phrase)
+            || output.exists()
+        {
+            failures.push(format!(
+                "{name}: exit {:?}, want `{want_place}` and `{phrase}`:\n{err}",
+                out.status.code()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn transforms_compose_as_pbrt_composes_them() {
+    let (scene, _) = loads(&world(
+        "AttributeBegin\n Translate 1 0 0\n Rotate 90 0 0 1\n Translate 1 0 0\n Scale 2 2 2\n \
+         Shape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n\
+         TransformBegin\n ConcatTransform [1 0 0 0  0 1 0 0  0 0 1 0  0 0 3 1]\n CoordinateSystem \"z3\"\nTransformEnd\n\
+         Shape \"sphere\"\n\
+         AttributeBegin\n CoordSysTransform \"z3\"\n Shape \"sphere\" \"float radius\" 0.25\nAttributeEnd\n\
+         AttributeBegin\n Translate 5 5 5\n Transform [1 0 0 0  0 1 0 0  0 0 1 0  0 -2 0 1]\n Shape \"sphere\" \"float radius\" 0.125\nAttributeEnd\n",
+    ));
+    let s = spheres(&scene);
+    assert_eq!(s.len(), 4, "{s:?}");
+    // Translate(1,0,0)·Rz(90°)·Translate(1,0,0): the origin goes to (1, 1, 0); radius 0.5 · 2.
+    assert!(
+        close(s[0].0, Vec3::new(1.0, 1.0, 0.0)) && (s[0].1 - 1.0).abs() < 1e-6,
+        "{s:?}"
+    );
+    // TransformEnd restored the identity; the named system kept the translation.
+    assert!(close(s[1].0, Vec3::ZERO) && s[1].1 == 1.0, "{s:?}");
+    assert!(close(s[2].0, Vec3::new(0.0, 0.0, 3.0)), "{s:?}");
+    // Transform replaces the current transform.
+    assert!(close(s[3].0, Vec3::new(0.0, -2.0, 0.0)), "{s:?}");
+}
+
+#[test]
+fn non_uniformly_scaled_spheres_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = load_text(dir.path(), &world("Scale 1 2 1\nShape \"sphere\"\n")).unwrap_err();
+    assert!(e.to_string().contains("not a uniform scale"), "{e}");
+}
+
+fn camera_of(text: &str) -> Camera {
+    loads(text).0.camera
+}
+
+#[test]
+fn the_camera_follows_pbrts_fov_and_handedness() {
+    let body = "WorldBegin\nLightSource \"point\"\nShape \"sphere\"\nWorldEnd\n";
+    let plain = camera_of(&format!(
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n\
+        Film \"image\" \"integer xresolution\" 200 \"integer yresolution\" 100\n{body}"
+    ));
+    assert_eq!(
+        plain.handedness,
+        Handedness::Left,
+        "pbrt's LookAt camera space is left-handed"
+    );
+    assert!(close(plain.position, Vec3::new(0.0, 0.0, 5.0)));
+    assert!(close(
+        (plain.look_at - plain.position).normalize(),
+        -Vec3::Z
+    ));
+    assert!(
+        (plain.fov_y_degrees - 30.0).abs() < 1e-4,
+        "landscape: fov is the vertical one"
+    );
+    let flipped = camera_of(&format!(
+        "Scale -1 1 1\nLookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n\
+        Film \"image\" \"integer xresolution\" 100 \"integer yresolution\" 200\n{body}"
+    ));
+    assert_eq!(flipped.handedness, Handedness::Right);
+    // Portrait: 30° spans the width, so the height spans 2·atan(2·tan 15°).
+    let want = 2.0 * (2.0 * 15f32.to_radians().tan()).atan().to_degrees();
+    assert!(
+        (flipped.fov_y_degrees - want).abs() < 1e-3,
+        "{} vs {want}",
+        flipped.fov_y_degrees
+    );
+    assert_eq!((flipped.width, flipped.height), (100, 200));
+}
+
+#[test]
+fn materials_map_exactly_or_warn_once_and_strict_refuses_approximations() {
+    let text = world(
+        "MakeNamedMaterial \"coat\" \"string type\" \"uber\" \"rgb Kd\" [0.2 0.3 0.4] \"rgb Ks\" [0.5 0.5 0.5]\n\
+         NamedMaterial \"coat\"\nShape \"sphere\"\nTranslate 3 0 0\nShape \"sphere\"\n\
+         Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"\nShape \"sphere\"\n\
+         Material \"dielectric\" \"float eta\" 1.33\nShape \"sphere\"\n\
+         Material \"diffuse\" \"rgb reflectance\" [0.1 0.2 0.3]\nShape \"sphere\"\n",
+    );
+    let (scene, report) = loads(&text);
+    let m = &scene.materials;
+    assert_eq!(
+        m.len(),
+        4,
+        "one scene material per pbrt material used: {m:?}"
+    );
+    assert_eq!(
+        m[0],
+        Material::Diffuse {
+            albedo: Vec3::new(0.2, 0.3, 0.4)
+        }
+    );
+    assert!(matches!(m[1], Material::Mirror { .. }), "{m:?}");
+    assert!(
+        matches!(m[2], Material::Glass { ior, .. } if (ior - 1.33).abs() < 1e-6),
+        "{m:?}"
+    );
+    assert_eq!(
+        m[3],
+        Material::Diffuse {
+            albedo: Vec3::new(0.1, 0.2, 0.3)
+        }
+    );
+    let uber: Vec<_> = report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("uber"))
+        .collect();
+    assert_eq!(
+        uber.len(),
+        2,
+        "one mapping warning and one for Ks: {:?}",
+        report.warnings
+    );
+    assert!(
+        uber.iter().all(|w| w.contains("scene.pbrt:6:1")),
+        "{uber:?}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_scene(dir.path(), "scene.pbrt", &text);
+    let e = scene::load_with_options(&path, &LoadOptions { strict: true }).unwrap_err();
+    assert_eq!((e.line, e.column), (Some(6), Some(1)), "{e}");
+    assert!(e.message.contains("--strict"), "{e}");
+}
+
+#[test]
+fn include_shares_the_graphics_state_and_import_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    write_scene(
+        dir.path(),
+        "part.pbrt",
+        "Translate 0 2 0\nShape \"sphere\" \"float radius\" 0.5\n",
+    );
+    let text = world(
+        "Include \"part.pbrt\"\nShape \"sphere\"\nImport \"part.pbrt\"\nShape \"sphere\" \"float radius\" 2\n",
+    );
+    let (scene, _) = load_text(dir.path(), &text).unwrap();
+    let s = spheres(&scene);
+    assert!(close(s[0].0, Vec3::new(0.0, 2.0, 0.0)), "{s:?}");
+    assert!(
+        close(s[1].0, Vec3::new(0.0, 2.0, 0.0)),
+        "Include kept the translation: {s:?}"
+    );
+    assert!(close(s[2].0, Vec3::new(0.0, 4.0, 0.0)), "{s:?}");
+    assert!(
+        close(s[3].0, Vec3::new(0.0, 2.0, 0.0)),
+        "Import dropped its own translation: {s:?}"
+    );
+}
+
+#[test]
+fn a_quad_area_light_emits_to_the_side_pbrt_says() {
+    let quad = "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [0 1 0  1 1 0  1 1 1  0 1 1]\n";
+    let floor = "Shape \"sphere\"\n";
+    // A mirroring transform keeps pbrt's object-space orientation (it flips the winding back).
+    for (prefix, up) in [
+        ("", false),
+        ("ReverseOrientation\n", true),
+        ("Scale 1 1 -1\n", false),
+        ("Scale 1 1 -1\nReverseOrientation\n", true),
+    ] {
+        let (scene, _) = loads(&world(&format!(
+            "{floor}AttributeBegin\n{prefix}{quad}AttributeEnd\n"
+        )));
+        let Some(Light::Quad {
+            edge_u,
+            edge_v,
+            power,
+            ..
+        }) = scene.lights.last()
+        else {
+            panic!("a quad light: {:?}", scene.lights);
+        };
+        let n = edge_u.cross(*edge_v).normalize();
+        // P winds (0,1,0) → (1,1,0) → (1,1,1): its normal is -y; ReverseOrientation turns it up.
+        assert!(
+            close(n, if up { Vec3::Y } else { -Vec3::Y }),
+            "{prefix:?}: {n}"
+        );
+        // Φ = π · A · L with A = 1.
+        assert!((power.x - std::f32::consts::PI).abs() < 1e-5, "{power}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// Deleting, repeating or replacing a token of a valid file, or cutting it short, gives a
+    /// scene or an error that names a line; it never panics.
+    #[test]
+    fn mutated_pbrt_files_load_or_fail_with_a_place(
+        which in 0usize..2,
+        at in 0usize..10_000,
+        op in 0usize..4,
+        junk in prop::sample::select(vec!["[", "]", "\"", "-1e39", "nan", "\"float radius\"", "AttributeEnd", "0", "\"point3 P\" [1 2]", "Include \"x\""]),
+    ) {
+        let texts = [
+            std::fs::read_to_string(repo_path("scenes/cornell-box.pbrt")).unwrap(),
+            world("AttributeBegin\nMaterial \"glass\"\nShape \"trianglemesh\" \"integer indices\" [0 1 2] \"point3 P\" [0 0 0 1 0 0 0 1 0]\nAttributeEnd\n"),
+        ];
+        let text = &texts[which];
+        let words: Vec<&str> = text.split(' ').collect();
+        let i = at % words.len();
+        let mutated = match op {
+            0 => [&words[..i], &words[i + 1..]].concat().join(" "),
+            1 => [&words[..=i], &words[i..]].concat().join(" "),
+            2 => [&words[..i], &[junk], &words[i + 1..]].concat().join(" "),
+            _ => text[..text.char_indices().nth(at % text.len()).map_or(0, |c| c.0)].to_string(),
+        };
+        let dir = tempfile::tempdir().unwrap();
+        if let Err(e) = load_text(dir.path(), &mutated) {
+            prop_assert!(e.line.is_some() || e.field == "WorldBegin", "no place: {e}");
+        }
+    }
+}
