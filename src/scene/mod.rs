@@ -10,10 +10,11 @@
 //! the public types, `mesh` reads OBJ/MTL files, `transform` places meshes in the world.
 
 mod document;
+pub mod files;
 mod format;
 mod mesh;
 mod pbrt;
-mod ply;
+pub mod ply;
 pub(crate) mod transform;
 mod validate;
 
@@ -154,6 +155,15 @@ pub fn load_with_report(path: &Path) -> Result<(SceneDescription, LoadReport), S
     load_with_options(path, &LoadOptions::default())
 }
 
+/// A pbrt scene read from `files` (the fuzz targets' in-memory set).
+pub fn load_pbrt_from(
+    path: &Path,
+    files: &dyn files::SceneFiles,
+    options: &LoadOptions,
+) -> Result<(SceneDescription, LoadReport), SceneError> {
+    pbrt::load(path, files, options)
+}
+
 /// [`load_with_report`] with `options`.
 pub fn load_with_options(
     path: &Path,
@@ -164,7 +174,7 @@ pub fn load_with_options(
         .is_some_and(|e| e.eq_ignore_ascii_case("pbrt"))
         && !path.is_dir()
     {
-        return pbrt::load(path, options);
+        return pbrt::load(path, &files::Disk, options);
     }
     let whole_file_error = |message: String| SceneError {
         file: path.to_path_buf(),

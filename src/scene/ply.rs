@@ -4,12 +4,13 @@
 //! against the bytes (or lines) the file really has before anything is allocated for it, so a
 //! header that claims 10¹² vertices is refused, not obeyed. Must not know scenes or Embree.
 
+use super::files::SceneFiles;
 use glam::Vec3;
 use std::path::Path;
 
 /// A mesh as the file gives it, in the file's own coordinates.
 #[derive(Debug, Default, PartialEq)]
-pub(crate) struct PlyMesh {
+pub struct PlyMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
     pub triangles: Vec<[u32; 3]>,
@@ -17,7 +18,7 @@ pub(crate) struct PlyMesh {
 
 /// What went wrong, and where: a header line, or an element of the body.
 #[derive(Debug, PartialEq)]
-pub(crate) struct PlyError {
+pub struct PlyError {
     /// 1-based line (header lines, and body lines of an ASCII file).
     pub line: Option<usize>,
     /// The header line or element named, e.g. `element vertex` or `face[12]`.
@@ -113,8 +114,8 @@ struct Element {
 /// Vertex indices above this do not fit the u32 triangles (and no real file has them).
 const MAX_VERTICES: usize = u32::MAX as usize;
 
-pub(crate) fn read(path: &Path) -> Result<PlyMesh, PlyError> {
-    let bytes = std::fs::read(path).map_err(|err| PlyError {
+pub fn read(path: &Path, files: &dyn SceneFiles) -> Result<PlyMesh, PlyError> {
+    let bytes = files.read(path).map_err(|err| PlyError {
         line: None,
         field: "file".into(),
         message: format!("cannot read: {err}"),
@@ -122,7 +123,7 @@ pub(crate) fn read(path: &Path) -> Result<PlyMesh, PlyError> {
     parse(&bytes)
 }
 
-pub(crate) fn parse(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
+pub fn parse(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
     let (encoding, elements, body_start, header_lines) = header(bytes)?;
     let body = &bytes[body_start..];
     let mut reader = match encoding {

@@ -11,6 +11,7 @@ mod mapping;
 mod params;
 mod parser;
 
+use super::files::SceneFiles;
 use super::{LoadOptions, LoadReport, SceneDescription, SceneError};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -51,11 +52,12 @@ impl fmt::Display for Place {
     }
 }
 
-/// Reads the pbrt scene at `path` and the files it includes.
+/// Reads the pbrt scene at `path` and the files it includes from `files`.
 pub(crate) fn load(
     path: &Path,
+    files: &dyn SceneFiles,
     options: &LoadOptions,
 ) -> Result<(SceneDescription, LoadReport), SceneError> {
-    let parsed = parser::parse(path)?;
-    mapping::scene(path, parsed, options)
+    let parsed = parser::parse(path, files)?;
+    mapping::scene(path, parsed, files, options)
 }

@@ -8,6 +8,7 @@
 use super::lexer::{Token, TokenKind, tokens};
 use super::params::{ParamError, ParamList, show};
 use super::{Dialect, PbrtError, Place};
+use crate::scene::files::SceneFiles;
 use crate::scene::transform::rotation;
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
@@ -97,7 +98,8 @@ enum Pushed {
     Transform(Mat4, Place),
 }
 
-pub(super) struct Parser {
+pub(super) struct Parser<'f> {
+    files: &'f dyn SceneFiles,
     out: Parsed,
     state: GraphicsState,
     stack: Vec<Pushed>,
@@ -110,9 +112,10 @@ pub(super) struct Parser {
     include_stack: Vec<PathBuf>,
 }
 
-/// Reads `path` and everything it includes.
-pub(super) fn parse(path: &Path) -> Result<Parsed, PbrtError> {
+/// Reads `path` and everything it includes from `files`.
+pub(super) fn parse(path: &Path, files: &dyn SceneFiles) -> Result<Parsed, PbrtError> {
     let mut parser = Parser {
+        files,
         out: Parsed::default(),
         state: GraphicsState {
             ctm: Mat4::IDENTITY,
@@ -145,7 +148,7 @@ pub(super) fn parse(path: &Path) -> Result<Parsed, PbrtError> {
     Ok(parser.out)
 }
 
-impl Parser {
+impl Parser<'_> {
     /// Resolves a path named in the files: relative to the main file's folder, as pbrt does.
     pub(super) fn resolve(folder: &Path, name: &str) -> PathBuf {
         let p = Path::new(name);
@@ -172,11 +175,11 @@ impl Parser {
                 "includes nest deeper than {MAX_INCLUDE_DEPTH} files (a cycle?)"
             )));
         }
-        let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+        let canonical = self.files.identity(path);
         if self.include_stack.contains(&canonical) {
             return Err(refuse(format!("`{}` includes itself", path.display())));
         }
-        let bytes = std::fs::read(path)
+        let bytes = (self.files.read(path))
             .map_err(|err| refuse(format!("cannot read `{}`: {err}", path.display())))?;
         let text = String::from_utf8(bytes)
             .map_err(|_| refuse(format!("`{}` is not UTF-8 text", path.display())))?;

@@ -11,7 +11,7 @@ use crate::scene::{Light, SceneError};
 use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 
-impl Mapper {
+impl Mapper<'_> {
     /// `I` or `L` (default 1) times `scale` (an RGB in pbrt-v3, a float in pbrt-v4).
     fn emission(&self, item: &Item, name: &str) -> Result<Vec3, SceneError> {
         let p = |e| param_error(&item.at, "LightSource", e);

@@ -35,7 +35,7 @@ pub(super) struct Mapped {
     pub approximation: Option<String>,
 }
 
-impl Mapper {
+impl Mapper<'_> {
     pub(super) fn material(
         &mut self,
         kind: &str,
@@ -243,7 +243,7 @@ impl Mapper {
     }
 }
 
-impl Mapper {
+impl Mapper<'_> {
     /// dpm's mirror for pbrt's reflectance `tint`.
     fn mirror(&self, _tint: Vec3) -> Material {
         Material::Mirror

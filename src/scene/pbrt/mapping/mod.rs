@@ -11,6 +11,7 @@ mod shapes;
 use super::params::ParamError;
 use super::parser::{CameraItem, Item, Parsed};
 use super::{Dialect, Place};
+use crate::scene::files::SceneFiles;
 use crate::scene::{
     Camera, Handedness, LoadOptions, LoadReport, Material, SceneDescription, SceneError, validate,
 };
@@ -23,7 +24,8 @@ const DEFAULT_RESOLUTION: [i64; 2] = [640, 480];
 /// A side longer than this is surely a typo, and its film would not fit in memory.
 const MAX_RESOLUTION: i64 = 1 << 16;
 
-pub(super) struct Mapper {
+pub(super) struct Mapper<'f> {
+    files: &'f dyn SceneFiles,
     folder: PathBuf,
     strict: bool,
     dialect: (Dialect, String),
@@ -47,9 +49,11 @@ pub(super) fn param_error(at: &Place, directive: &str, e: ParamError) -> SceneEr
 pub(super) fn scene(
     path: &Path,
     parsed: Parsed,
+    files: &dyn SceneFiles,
     options: &LoadOptions,
 ) -> Result<(SceneDescription, LoadReport), SceneError> {
     let mut m = Mapper {
+        files,
         folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         strict: options.strict,
         dialect: parsed.dialect.dialect(),
@@ -120,7 +124,7 @@ pub(super) fn scene(
     Ok((scene, report))
 }
 
-impl Mapper {
+impl Mapper<'_> {
     pub(super) fn warn(&mut self, at: &Place, message: String) {
         self.report.warnings.push(format!("{at}: {message}"));
     }

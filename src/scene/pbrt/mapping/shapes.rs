@@ -19,7 +19,7 @@ pub(in super::super) enum Geometry {
     Triangles(TriangleMesh),
 }
 
-impl Mapper {
+impl Mapper<'_> {
     pub(super) fn shape(
         &mut self,
         shape: &ShapeItem,
@@ -75,7 +75,7 @@ impl Mapper {
                     return Err(value_error(item, "Shape", "displacement", "displacement maps are not supported".into()));
                 }
                 ignore(item, &["edgelength"]);
-                let read = ply::read(&path).map_err(|e| match e.line {
+                let read = ply::read(&path, self.files).map_err(|e| match e.line {
                     None if e.field == "file" => value_error(item, "Shape", "filename", format!("`{}`: {}", path.display(), e.message)),
                     _ => SceneError {
                         file: path.clone(),

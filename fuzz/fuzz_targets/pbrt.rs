@@ -1,0 +1,18 @@
+//! The pbrt parser and mapping, with includes and PLY meshes from the same input (`@@@ NAME`
+//! lines): a scene that loads is finite and consistent, a refusal names a place.
+#![no_main]
+
+#[path = "support/mod.rs"]
+mod support;
+
+use dpm::scene::{LoadOptions, load_pbrt_from};
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let files = support::files(data, "scene.pbrt");
+    let strict = data.first().is_some_and(|b| b & 1 == 1);
+    match load_pbrt_from(&support::scene_path("scene.pbrt"), &files, &LoadOptions { strict }) {
+        Ok((scene, _report)) => support::check_scene(&scene),
+        Err(e) => support::check_error(&e),
+    }
+});

@@ -1,0 +1,85 @@
+//! What the scene fuzz targets share: one input holds several files (`@@@ NAME` lines start
+//! each after the first), and a loaded scene must be finite and consistent.
+#![allow(dead_code)]
+
+use dpm::scene::files::InMemory;
+use dpm::scene::{Light, Material, SceneDescription, SceneError, Shape};
+use std::path::{Path, PathBuf};
+
+/// Splits `data` into files: the first is `first`, each later one follows a line `@@@ NAME`.
+pub fn files(data: &[u8], first: &str) -> InMemory {
+    let mut files = InMemory::default();
+    let mut name = first.to_string();
+    let mut start = 0;
+    let marker = b"\n@@@ ";
+    let mut at = 0;
+    while let Some(i) = find(&data[at..], marker) {
+        let head = at + i;
+        files.insert(Path::new("fuzz").join(&name), &data[start..head]);
+        let name_start = head + marker.len();
+        let name_end = data[name_start..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(data.len(), |j| name_start + j);
+        name = String::from_utf8_lossy(&data[name_start..name_end]).trim().to_string();
+        start = (name_end + 1).min(data.len());
+        at = start;
+    }
+    files.insert(Path::new("fuzz").join(&name), &data[start..]);
+    files
+}
+
+pub fn scene_path(first: &str) -> PathBuf {
+    Path::new("fuzz").join(first)
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+/// A scene that loaded: every number finite, every index in range, every light emitting.
+pub fn check_scene(scene: &SceneDescription) {
+    let c = &scene.camera;
+    assert!(c.position.is_finite() && c.look_at.is_finite() && c.up.is_finite());
+    assert!(c.fov_y_degrees > 0.0 && c.fov_y_degrees < 180.0 && c.width > 0 && c.height > 0);
+    assert!(!scene.lights.is_empty() && !scene.shapes.is_empty());
+    for light in &scene.lights {
+        let power = match light {
+            Light::Point { power, .. } | Light::Sphere { power, .. } | Light::Quad { power, .. } => *power,
+        };
+        assert!(power.is_finite() && power.min_element() >= 0.0 && power.max_element() > 0.0, "{light:?}");
+    }
+    for m in &scene.materials {
+        match m {
+            Material::Diffuse { albedo } => assert!(albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0),
+            Material::Glass { ior, .. } => assert!(*ior >= 1.0 && ior.is_finite()),
+            _ => {}
+        }
+    }
+    for shape in &scene.shapes {
+        match shape {
+            Shape::Sphere { center, radius, material } => {
+                assert!(center.is_finite() && radius.is_finite() && *radius > 0.0);
+                assert!((*material as usize) < scene.materials.len());
+            }
+            Shape::Triangles(mesh) => {
+                assert!((mesh.material as usize) < scene.materials.len());
+                assert!(!mesh.triangles.is_empty());
+                assert!(mesh.positions.iter().all(|p| p.is_finite()));
+                let n = mesh.positions.len();
+                assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
+                if let Some(normals) = &mesh.normals {
+                    assert_eq!(normals.len(), n);
+                    assert!(normals.iter().all(|v| v.is_finite() && (v.length() - 1.0).abs() < 1e-3));
+                }
+            }
+        }
+    }
+}
+
+/// A refusal names the file and a place in it, or the field it is about.
+pub fn check_error(e: &SceneError) {
+    assert!(!e.file.as_os_str().is_empty(), "{e}");
+    assert!(e.line.is_some() || !e.field.is_empty(), "{e}");
+    assert!(!e.message.is_empty(), "{e}");
+}
