@@ -45,15 +45,6 @@ fn merge_args(films: &[&Path], out: &Path, film: Option<&Path>) -> MergeArgs {
     }
 }
 
-/// Largest per-pixel relative difference of two films' sums (over pixels with light).
-fn max_relative_difference(a: &[f64], b: &[f64]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs() / x.abs().max(y.abs()).max(1e-12))
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn shards_merged_equal_one_run_and_resuming_equals_both() {
     let dir = tempfile::tempdir().unwrap();
@@ -151,10 +142,7 @@ fn merge_refuses_overlaps_and_films_of_another_render() {
     refused(&[&p01, &k], &["k.film", "differ in settings"]);
     // A gap is merged, and named.
     let merged = merge::run(&merge_args(&[&p01, &p3], &out, None)).expect("merge with a gap");
-    assert_eq!(
-        merged.missing_text().as_deref(),
-        Some("passes 2 are missing")
-    );
+    assert_eq!(merged.missing_text().as_deref(), Some("pass 2 is missing"));
     let mut strict = merge_args(&[&p01, &p3], &d("s.pfm"), None);
     strict.expect = Some(4);
     let e = merge::run(&strict).expect_err("--expect refuses the gap");

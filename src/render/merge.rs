@@ -69,10 +69,19 @@ pub struct MergeOutcome {
 impl MergeOutcome {
     /// "passes 2-3, 7 are missing" or None.
     pub fn missing_text(&self) -> Option<String> {
-        (!self.missing.is_empty()).then(|| {
-            let list: Vec<String> = self.missing.iter().map(|r| range_text(*r)).collect();
-            format!("passes {} are missing", list.join(", "))
-        })
+        (!self.missing.is_empty()).then(|| missing_text(&self.missing))
+    }
+}
+
+/// "pass 2 is missing", "passes 2-3, 7 are missing": every range, so a scale-out user sees
+/// which shards to rerun.
+pub fn missing_text(missing: &[(u64, u64)]) -> String {
+    let list: Vec<String> = missing.iter().map(|r| range_text(*r)).collect();
+    let count: u64 = missing.iter().map(|(a, b)| b - a).sum();
+    if count == 1 {
+        format!("pass {} is missing", list.join(", "))
+    } else {
+        format!("passes {} are missing", list.join(", "))
     }
 }
 
@@ -130,12 +139,11 @@ pub fn run(args: &MergeArgs) -> Result<MergeOutcome, MergeError> {
         if merged.passes().end() < n {
             missing.push((merged.passes().end(), n));
         }
-        if let Some(&r) = missing.first() {
+        if !missing.is_empty() {
+            let count: u64 = missing.iter().map(|(a, b)| b - a).sum();
             return Err(MergeError::Invalid(format!(
-                "--expect {n}: pass {} is missing (and {} more); rerun those passes with \
-                 --first-pass and --passes",
-                range_text(r),
-                missing.iter().map(|(a, b)| b - a).sum::<u64>() - 1
+                "--expect {n}: {} ({count} of {n}); rerun them with --first-pass and --passes",
+                missing_text(&missing)
             )));
         }
     }

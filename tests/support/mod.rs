@@ -140,6 +140,16 @@ pub fn hit_parallelogram(o: DVec3, d: DVec3, corner: DVec3, u: DVec3, v: DVec3) 
     ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&w)).then_some(p)
 }
 
+/// Largest per-pixel relative difference of two films' sums (over pixels with light): the
+/// tolerance of films rendered apart and merged against one run is 1e-6.
+pub fn max_relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / x.abs().max(y.abs()).max(1e-12))
+        .fold(0.0, f64::max)
+}
+
 pub fn rel_err(got: f64, want: f64) -> f64 {
     (got - want).abs() / want.abs().max(1e-300)
 }
