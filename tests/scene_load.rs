@@ -133,7 +133,11 @@ fn scenes_use_every_light_and_material_kind() {
             .iter()
             .any(|m| matches!(m, Material::Diffuse { .. }))
     );
-    assert!(materials.iter().any(|m| matches!(m, Material::Mirror)));
+    assert!(
+        materials
+            .iter()
+            .any(|m| matches!(m, Material::Mirror { .. }))
+    );
     assert!(
         materials
             .iter()
@@ -157,7 +161,7 @@ fn torus_knot_is_closed_glass_floating_over_the_floor_under_a_small_light() {
     assert_eq!(knot.positions.len(), 600 * 24);
     assert_eq!(
         scene.materials[knot.material as usize],
-        Material::Glass { ior: 1.5 }
+        Material::clear_glass(1.5)
     );
     assert!(matches!(
         scene.materials[floor.material as usize],
@@ -221,7 +225,7 @@ fn metal_ring_is_a_squashed_mirror_shell_lit_from_a_low_angle() {
         3 * 720 * 2,
         "inner wall, outer wall, rim"
     );
-    assert_eq!(scene.materials[ring.material as usize], Material::Mirror);
+    assert_eq!(scene.materials[ring.material as usize], Material::MIRROR);
     assert_normals_agree_with_winding(ring, "metal ring");
 
     let (min, max) = bounds(ring);
@@ -297,11 +301,11 @@ fn cornell_box_walls_face_inward_around_a_mirror_and_a_glass_sphere() {
         })
         .collect();
     assert_eq!(sphere_materials.len(), 2);
-    assert!(sphere_materials.contains(&&Material::Mirror));
+    assert!(sphere_materials.contains(&&Material::MIRROR));
     assert!(
         sphere_materials
             .iter()
-            .any(|m| matches!(m, Material::Glass { ior } if (*ior - 1.5).abs() < 1e-6))
+            .any(|m| matches!(m, Material::Glass { ior, .. } if (*ior - 1.5).abs() < 1e-6))
     );
 }
 
@@ -396,11 +400,11 @@ fn mtl_materials_map_to_diffuse_mirror_and_glass() {
             },
             2,
         ),
-        (Material::Mirror, 1),
-        (Material::Mirror, 1),
-        (Material::Glass { ior: 1.45 }, 1),
-        (Material::Glass { ior: 1.33 }, 1),
-        (Material::Glass { ior: 1.6 }, 1),
+        (Material::MIRROR, 1),
+        (Material::MIRROR, 1),
+        (Material::clear_glass(1.45), 1),
+        (Material::clear_glass(1.33), 1),
+        (Material::clear_glass(1.6), 1),
         (
             Material::Diffuse {
                 albedo: Vec3::splat(0.3),

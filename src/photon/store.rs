@@ -27,7 +27,7 @@
 use super::tracer::MapKind;
 use super::{Photon, PhotonMap};
 use crate::image_io::{self, ImageError};
-use crate::scene::{Light, Material, SceneDescription, Shape};
+use crate::scene::{Light, Material, SceneDescription, Shape, SpotFalloff, TriangleMesh};
 use glam::Vec3;
 use std::fs::File;
 use std::io::{self, BufReader, Read, Write};
@@ -152,6 +152,20 @@ impl Fnv64 {
     fn vec3(&mut self, v: Vec3) {
         v.to_array().into_iter().for_each(|x| self.f32(x));
     }
+    fn mesh(&mut self, mesh: &TriangleMesh) {
+        self.u32(mesh.material);
+        self.u64(mesh.positions.len() as u64);
+        mesh.positions.iter().for_each(|&p| self.vec3(p));
+        match &mesh.normals {
+            Some(normals) => {
+                self.u32(1);
+                normals.iter().for_each(|&n| self.vec3(n));
+            }
+            None => self.u32(0),
+        }
+        self.u64(mesh.triangles.len() as u64);
+        mesh.triangles.iter().flatten().for_each(|&i| self.u32(i));
+    }
 }
 
 /// A fingerprint of everything photon tracing reads from a scene: lights, materials and
@@ -190,6 +204,47 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
                 h.vec3(*edge_v);
                 h.vec3(*power);
             }
+            Light::Spot {
+                position,
+                direction,
+                cone_angle_degrees,
+                falloff_start_degrees,
+                falloff,
+                power,
+            } => {
+                h.u32(3);
+                h.vec3(*position);
+                h.vec3(*direction);
+                h.f32(*cone_angle_degrees);
+                h.f32(*falloff_start_degrees);
+                h.u32(match falloff {
+                    SpotFalloff::Smoothstep => 0,
+                    SpotFalloff::Quartic => 1,
+                });
+                h.vec3(*power);
+            }
+            Light::Distant {
+                direction,
+                irradiance,
+            } => {
+                h.u32(4);
+                h.vec3(*direction);
+                h.vec3(*irradiance);
+            }
+            Light::Environment { radiance } => {
+                h.u32(5);
+                h.vec3(*radiance);
+            }
+            Light::Mesh {
+                mesh,
+                power,
+                two_sided,
+            } => {
+                h.u32(6);
+                h.mesh(mesh);
+                h.vec3(*power);
+                h.u32(u32::from(*two_sided));
+            }
         }
     }
     h.u64(scene.materials.len() as u64);
@@ -199,10 +254,19 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
                 h.u32(0);
                 h.vec3(*albedo);
             }
-            Material::Mirror => h.u32(1),
-            Material::Glass { ior } => {
+            Material::Mirror { tint } => {
+                h.u32(1);
+                h.vec3(*tint);
+            }
+            Material::Glass {
+                ior,
+                reflect_tint,
+                transmit_tint,
+            } => {
                 h.u32(2);
                 h.f32(*ior);
+                h.vec3(*reflect_tint);
+                h.vec3(*transmit_tint);
             }
         }
     }
@@ -221,18 +285,7 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
             }
             Shape::Triangles(mesh) => {
                 h.u32(1);
-                h.u32(mesh.material);
-                h.u64(mesh.positions.len() as u64);
-                mesh.positions.iter().for_each(|&p| h.vec3(p));
-                match &mesh.normals {
-                    Some(normals) => {
-                        h.u32(1);
-                        normals.iter().for_each(|&n| h.vec3(n));
-                    }
-                    None => h.u32(0),
-                }
-                h.u64(mesh.triangles.len() as u64);
-                mesh.triangles.iter().flatten().for_each(|&i| h.u32(i));
+                h.mesh(mesh);
             }
         }
     }

@@ -3,6 +3,8 @@
 //! independently of the crate so that the tests do not check the code with itself.
 #![allow(dead_code)]
 
+pub mod eye;
+
 use clap::Parser;
 use dpm::render::pipeline::RenderArgs;
 use dpm::scene::{self, SceneDescription};
