@@ -54,6 +54,25 @@ fn diffuse_plane_under_a_point_light_has_the_analytic_radiance() {
     );
 }
 
+/// `--resolution WxH` renders the scene at that size with its own vertical field of view: the
+/// same pixels as the scene file with that `resolution`.
+#[test]
+fn the_resolution_flag_overrides_the_scenes_keeping_its_field_of_view() {
+    let file = scene_with_resolution("scenes/point-plane.toml", 64, 48);
+    let (flagged, desc) = render_scene(&file, &["--resolution", "40x20"]);
+    let (written, _) = render_scene(
+        &scene_with_resolution("scenes/point-plane.toml", 40, 20),
+        &[],
+    );
+    assert_eq!((flagged.image.width, flagged.image.height), (40, 20));
+    assert_eq!(flagged.image, written.image);
+    assert_eq!(
+        (desc.camera.width, desc.camera.height),
+        (64, 48),
+        "the file is unchanged"
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // 2. Glass and mirror spheres in front of a large emitter
 // ---------------------------------------------------------------------------------------------

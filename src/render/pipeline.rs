@@ -100,7 +100,7 @@ pub struct RenderArgs {
     /// Render at WIDTHxHEIGHT pixels instead of the scene's `resolution` (e.g. 1280x720). The
     /// vertical field of view stays the scene's `fov_y`, so a wider image sees more at the
     /// sides. A film remembers its resolution: --resume and `dpm merge` refuse another.
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution)]
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution, allow_hyphen_values = true)]
     pub resolution: Option<(u32, u32)>,
 
     /// Camera samples per pixel in each pass, stratified within the pixel across samples and

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod eye;
+pub mod photons;
 
 use clap::Parser;
 use dpm::render::pipeline::RenderArgs;
