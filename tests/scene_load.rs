@@ -109,6 +109,7 @@ fn every_scene_in_scenes_loads() {
             "cornell-point.toml",
             "metal-ring.toml",
             "point-plane.toml",
+            "spot-and-sky.toml",
             "torus-knot.toml"
         ]
     );
@@ -120,6 +121,7 @@ fn scenes_use_every_light_and_material_kind() {
         "cornell-box.toml",
         "metal-ring.toml",
         "point-plane.toml",
+        "spot-and-sky.toml",
         "torus-knot.toml",
     ]
     .map(load_scene);
@@ -127,6 +129,26 @@ fn scenes_use_every_light_and_material_kind() {
     assert!(lights.iter().any(|l| matches!(l, Light::Point { .. })));
     assert!(lights.iter().any(|l| matches!(l, Light::Sphere { .. })));
     assert!(lights.iter().any(|l| matches!(l, Light::Quad { .. })));
+    assert!(lights.iter().any(|l| matches!(
+        l,
+        Light::Spot {
+            falloff: scene::SpotFalloff::Quartic,
+            ..
+        }
+    )));
+    assert!(lights.iter().any(|l| matches!(l, Light::Distant { .. })));
+    assert!(
+        lights
+            .iter()
+            .any(|l| matches!(l, Light::Environment { .. }))
+    );
+    assert!(lights.iter().any(|l| matches!(
+        l,
+        Light::Mesh {
+            two_sided: true,
+            ..
+        }
+    )));
     let materials: Vec<&Material> = scenes.iter().flat_map(|s| &s.materials).collect();
     assert!(
         materials
@@ -143,6 +165,17 @@ fn scenes_use_every_light_and_material_kind() {
             .iter()
             .any(|m| matches!(m, Material::Glass { .. }))
     );
+    // Tints away from their defaults, every one.
+    let tinted = |v: &Vec3| *v != Vec3::ONE;
+    assert!(
+        materials
+            .iter()
+            .any(|m| matches!(m, Material::Mirror { tint } if tinted(tint)))
+    );
+    assert!(materials.iter().any(|m| matches!(
+        m,
+        Material::Glass { reflect_tint, transmit_tint, .. } if tinted(reflect_tint) && tinted(transmit_tint)
+    )));
 }
 
 #[test]

@@ -146,8 +146,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true)]
     pub irradiance_stride: usize,
 
-    /// Shadow rays per area light (sphere or quad) at each diffuse eye hit, stratified and
-    /// averaged; a point light takes one.
+    /// Shadow rays per area light (sphere, quad or mesh) and per environment at each diffuse
+    /// eye hit, stratified and averaged; a point, spot or distant light takes one.
     #[arg(
         long,
         value_name = "N",

@@ -375,11 +375,13 @@ impl MeshLight {
                 (running / total) as f32
             })
             .collect();
+        // A mesh without area (which `check_light` refuses) emits nothing rather than NaN.
+        let usable = total > 0.0 && total.is_finite();
         Self {
-            triangles,
-            cumulative,
+            triangles: if usable { triangles } else { Vec::new() },
+            cumulative: if usable { cumulative } else { Vec::new() },
             area: total as f32,
-            power,
+            power: if usable { power } else { Vec3::ZERO },
             two_sided,
         }
     }
@@ -390,6 +392,9 @@ impl MeshLight {
 
     /// Radiance leaving a side that emits.
     fn radiance(&self) -> Vec3 {
+        if self.triangles.is_empty() {
+            return Vec3::ZERO;
+        }
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         self.power / (sides * PI * self.area)
     }
@@ -425,6 +430,9 @@ impl MeshLight {
 
     /// Light arriving at `x`: a point drawn uniformly over the mesh.
     pub(super) fn incident(&self, x: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
+        if self.triangles.is_empty() {
+            return None;
+        }
         let (p, normal) = self.sample_point(u);
         flat_incident(p, normal, self.area, self.radiance(), self.two_sided, x)
     }
@@ -432,6 +440,9 @@ impl MeshLight {
     /// A photon from a point drawn by area, cosine-weighted or aimed from that point.
     #[inline(always)]
     pub(super) fn emit(&self, aim: &[BoundingSphere], rng: &mut Rng) -> Emission {
+        if self.triangles.is_empty() {
+            return nothing_from(Vec3::ZERO, Vec3::Y);
+        }
         let (origin, normal) = self.sample_point(rng.next_2d());
         if self.two_sided {
             two_sided_emission(origin, normal, self.power, aim, rng)
