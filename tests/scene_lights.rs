@@ -2,7 +2,8 @@
 //! come out as docs/scene-format.md says: defaults filled in (pbrt's cone of 30° with a 5°
 //! falloff, smoothstep, untinted), directions made unit, a mesh light's OBJ placed like a mesh
 //! object's (one flat mesh, material 0), MTL `Ks` tinting mirrors; and what loads passes
-//! `check_light` and `check_material`, which refuse what the file would.
+//! `check_light` and `check_material`, which refuse what the file would; and the photon-map
+//! fingerprint sees every new field.
 
 use dpm::scene::{
     self, Light, Material, SceneDescription, SpotFalloff, check_light, check_material,
@@ -258,4 +259,113 @@ fn the_checks_for_built_descriptions_refuse_what_the_file_does() {
         two_sided: false,
     };
     assert_eq!(field(&mesh), "mesh.triangles[0]");
+}
+
+/// The photon-map and film fingerprint of a scene sees every field of the new lights and every
+/// tint: changing any one changes it, so maps and films of the old values are refused.
+#[test]
+fn the_scene_fingerprint_sees_every_new_field() {
+    use dpm::photon::store::scene_fingerprint;
+    let (base, _) = scene_with(
+        "[[lights]]\ntype = \"spot\"\nposition = [0, 3, 0]\ndirection = [0, -1, 0]\npower = [1, 1, 1]\n\n\
+         [[lights]]\ntype = \"distant\"\ndirection = [0, -1, 0]\nirradiance = [1, 1, 1]\n\n\
+         [[lights]]\ntype = \"environment\"\nradiance = [1, 1, 1]\n\n\
+         [[lights]]\ntype = \"mesh\"\nfile = \"meshes/transform.obj\"\npower = [1, 1, 1]",
+        "[materials.chrome]\ntype = \"mirror\"\n\n[materials.glass]\ntype = \"glass\"\nior = 1.5",
+        "",
+    );
+    let before = scene_fingerprint(&base);
+    let changes: [&dyn Fn(&mut SceneDescription); 13] = [
+        &|s| set_spot(s, |position, _, _, _, _| position.x = 0.5),
+        &|s| set_spot(s, |_, direction, _, _, _| *direction = Vec3::X),
+        &|s| set_spot(s, |_, _, cone, _, _| *cone = 31.0),
+        &|s| set_spot(s, |_, _, _, start, _| *start = 20.0),
+        &|s| set_spot(s, |_, _, _, _, falloff| *falloff = SpotFalloff::Quartic),
+        &|s| {
+            s.lights[1] = Light::Distant {
+                direction: Vec3::X,
+                irradiance: Vec3::ONE,
+            }
+        },
+        &|s| {
+            s.lights[1] = Light::Distant {
+                direction: -Vec3::Y,
+                irradiance: Vec3::splat(2.0),
+            }
+        },
+        &|s| {
+            s.lights[2] = Light::Environment {
+                radiance: Vec3::splat(0.5),
+            }
+        },
+        &|s| {
+            if let Light::Mesh { two_sided, .. } = &mut s.lights[3] {
+                *two_sided = true;
+            }
+        },
+        &|s| {
+            if let Light::Mesh { mesh, .. } = &mut s.lights[3] {
+                mesh.positions[0].y += 0.1;
+            }
+        },
+        &|s| {
+            s.materials[0] = Material::Mirror {
+                tint: Vec3::new(1.0, 1.0, 0.5),
+            }
+        },
+        &|s| {
+            s.materials[1] = Material::Glass {
+                ior: 1.5,
+                reflect_tint: Vec3::new(0.5, 1.0, 1.0),
+                transmit_tint: Vec3::ONE,
+            }
+        },
+        &|s| {
+            s.materials[1] = Material::Glass {
+                ior: 1.5,
+                reflect_tint: Vec3::ONE,
+                transmit_tint: Vec3::new(0.5, 1.0, 1.0),
+            }
+        },
+    ];
+    // Materials are numbered in name order: chrome, glass, white.
+    assert_eq!(
+        base.materials[..2],
+        [Material::MIRROR, Material::clear_glass(1.5)]
+    );
+    for (i, change) in changes.iter().enumerate() {
+        let mut changed = base.clone();
+        change(&mut changed);
+        assert_ne!(changed, base, "change {i} changes nothing");
+        assert_ne!(
+            scene_fingerprint(&changed),
+            before,
+            "change {i} is not in the fingerprint"
+        );
+    }
+}
+
+/// Applies `f` to the fields of the first light, a spot.
+fn set_spot(
+    scene: &mut SceneDescription,
+    f: impl Fn(&mut Vec3, &mut Vec3, &mut f32, &mut f32, &mut SpotFalloff),
+) {
+    let Light::Spot {
+        position,
+        direction,
+        cone_angle_degrees,
+        falloff_start_degrees,
+        falloff,
+        ..
+    } = &mut scene.lights[0]
+    else {
+        panic!("the first light is a spot")
+    };
+    f(
+        position,
+        direction,
+        cone_angle_degrees,
+        falloff_start_degrees,
+        falloff,
+    );
 }
