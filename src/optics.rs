@@ -38,24 +38,43 @@ fn fresnel_with_cos_t(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
     0.5 * (r_s * r_s + r_p * r_p)
 }
 
+/// Which way [`scatter_dielectric`] sent a ray (a tinted glass scales each branch by its own
+/// tint).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scattered {
+    Reflected,
+    Transmitted,
+}
+
+impl Scattered {
+    /// `reflected` or `transmitted`, by the way the ray went.
+    #[inline(always)]
+    pub fn pick<T>(self, reflected: T, transmitted: T) -> T {
+        match self {
+            Scattered::Reflected => reflected,
+            Scattered::Transmitted => transmitted,
+        }
+    }
+}
+
 /// Where a photon arriving along unit `d` at a smooth dielectric with unit normal `n` (facing
-/// the incoming side, `eta` = n_incident / n_transmitted) goes: reflected with the Fresnel
-/// probability (`u` uniform in [0, 1) decides), refracted otherwise; reflected on total
-/// internal reflection. The same as choosing between [`reflect`] and [`refract`] by
-/// [`fresnel_dielectric`], with the transmitted cosine computed once and the refracted
-/// direction left unnormalised: it is unit by construction, to a few ulps.
+/// the incoming side, `eta` = n_incident / n_transmitted) goes, and by which branch: reflected
+/// with the Fresnel probability (`u` uniform in [0, 1) decides), refracted otherwise;
+/// reflected on total internal reflection. The same as choosing between [`reflect`] and
+/// [`refract`] by [`fresnel_dielectric`], with the transmitted cosine computed once and the
+/// refracted direction left unnormalised: it is unit by construction, to a few ulps.
 #[inline]
-pub fn scatter_dielectric(d: Vec3, n: Vec3, eta: f32, u: f32) -> Vec3 {
+pub fn scatter_dielectric(d: Vec3, n: Vec3, eta: f32, u: f32) -> (Vec3, Scattered) {
     let cos_i = (-d.dot(n)).clamp(0.0, 1.0);
     let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
     if sin2_t >= 1.0 {
-        return reflect(d, n);
+        return (reflect(d, n), Scattered::Reflected);
     }
     let cos_t = (1.0 - sin2_t).sqrt();
     if u < fresnel_with_cos_t(cos_i, cos_t, eta) {
-        reflect(d, n)
+        (reflect(d, n), Scattered::Reflected)
     } else {
-        eta * d + (eta * cos_i - cos_t) * n
+        (eta * d + (eta * cos_i - cos_t) * n, Scattered::Transmitted)
     }
 }
 
@@ -82,13 +101,17 @@ mod tests {
             let eta = if r() < 0.5 { 1.0 / 1.5 } else { 1.5 };
             let u = r();
             let cos_i = -d.dot(n);
-            let want = if u < fresnel_dielectric(cos_i, eta) {
-                reflect(d, n)
+            let (want, want_branch) = if u < fresnel_dielectric(cos_i, eta) {
+                (reflect(d, n), Scattered::Reflected)
             } else {
                 refracted += 1;
-                refract(d, n, eta).unwrap_or_else(|| reflect(d, n))
+                match refract(d, n, eta) {
+                    Some(t) => (t, Scattered::Transmitted),
+                    None => (reflect(d, n), Scattered::Reflected),
+                }
             };
-            let got = scatter_dielectric(d, n, eta, u);
+            let (got, branch) = scatter_dielectric(d, n, eta, u);
+            assert_eq!(branch, want_branch, "{d} {n} {eta} {u}");
             assert!(
                 (got - want).length() < 1e-6,
                 "{d} {n} {eta}: {got} vs {want}"

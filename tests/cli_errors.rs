@@ -216,6 +216,12 @@ fn bad_parameters_exit_2_naming_the_flag() {
         (&["--resume", "/no/such/film"], &["--resume /no/such/film", "does not exist"]),
         (&["--passes", "4", "--save-photons", "x.photons"], &["--save-photons", "one pass"]),
         (&["--reference", "/no/such/ref.pfm"], &["--reference /no/such/ref.pfm", "does not exist"]),
+        (&["--resolution", "640"], &["'640'", "--resolution", "WIDTHxHEIGHT"]),
+        (&["--resolution", "0x480"], &["'0x480'", "--resolution", "at least 1 pixel"]),
+        (&["--resolution", "640x0"], &["'640x0'", "--resolution", "at least 1 pixel"]),
+        (&["--resolution", "-640x480"], &["'-640x480'", "--resolution", "whole number"]),
+        (&["--resolution", "640xlots"], &["'640xlots'", "--resolution", "whole number"]),
+        (&["--resolution", "1e3x480"], &["'1e3x480'", "--resolution", "whole number"]),
     ];
     for (args, fragments) in cases {
         let out = f.render(&output, args);

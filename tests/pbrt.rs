@@ -8,9 +8,12 @@ mod support;
 
 use dpm::render::pipeline::{self, relative_mse};
 use dpm::scene::{self, Camera, Handedness, Light, LoadOptions, Material, Shape};
+use glam::DVec3;
 use glam::Vec3;
 use proptest::prelude::*;
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
+use support::eye::{PLANE_ALBEDO, check_plane_pixels};
 use support::{path_str, render_args, repo_path, scene_with_resolution, write_scene};
 
 fn render(scene: &Path, out: &Path) -> dpm::image_io::Image {
@@ -159,7 +162,7 @@ fn the_torus_knot_from_a_binary_ply_renders_the_obj_image() {
 /// relative to tests/fixtures/pbrt/bad) and a phrase of the message.
 #[rustfmt::skip]
 const MALFORMED: &[(&str, &str, &str)] = &[
-    ("albedo-above-one", "albedo-above-one.pbrt:7:1", "outside [0, 1]"),
+    ("albedo-above-one", "albedo-above-one.pbrt:7:1", "not in [0, 1]"),
     ("attribute-closed-by-transform-end", "attribute-closed-by-transform-end.pbrt:8:1", "does not match"),
     ("blackbody-light", "blackbody-light.pbrt:7:21", "blackbody"),
     ("film-resolution-zero", "film-resolution-zero.pbrt:3:14", "not from 1"),
@@ -238,6 +241,153 @@ fn every_malformed_pbrt_or_ply_file_exits_2_naming_its_place() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// scenes/point-plane.toml's plane and camera in pbrt, under `lights`; `end` is `WorldEnd`
+/// for a pbrt-v3 file (with v3's `matte`) or empty for a pbrt-v4 one (with v4's `diffuse`).
+fn pbrt_plane(lights: &str, end: &str) -> String {
+    let material = if end.is_empty() {
+        "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]"
+    } else {
+        "Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]"
+    };
+    format!(
+        "LookAt 0 2.5 3  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n\
+         Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 48\nWorldBegin\n{lights}\n\
+         {material}\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [-2 0 -2  -2 0 2  2 0 2  2 0 -2]\n{end}"
+    )
+}
+
+/// A one-pass render of a pbrt scene, and its description.
+fn render_pbrt(text: &str) -> (pipeline::RenderOutcome, scene::SceneDescription) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_scene(dir.path(), "scene.pbrt", text);
+    let out = dir.path().join("scene.pfm");
+    let outcome = pipeline::run(&render_args(&[
+        path_str(&path),
+        "-o",
+        path_str(&out),
+        "--threads",
+        "2",
+    ]))
+    .unwrap_or_else(|e| panic!("{e}"));
+    (outcome, scene::load(&path).unwrap())
+}
+
+#[test]
+fn a_pbrt_spot_light_gives_the_plane_its_analytic_irradiance_in_either_dialect() {
+    let (alpha, delta) = (40.0f64, 15.0f64);
+    let beta = alpha - delta;
+    let intensity = DVec3::new(10.0, 6.0, 3.0);
+    let position = DVec3::new(0.0, 1.0, 0.0);
+    let axis = DVec3::new(0.3, -1.0, 0.0).normalize();
+    let light = format!(
+        "LightSource \"spot\" \"point from\" [0 1 0] \"point to\" [0.3 0 0] \"float coneangle\" {alpha} \
+         \"float conedelta\" {delta} \"rgb I\" [10 6 3]"
+    );
+    // pbrt-v3 (its file ends with WorldEnd) shapes the edge with t⁴, pbrt-v4 with a smoothstep.
+    for (end, quartic) in [("WorldEnd\n", true), ("", false)] {
+        let (outcome, desc) = render_pbrt(&pbrt_plane(&light, end));
+        let (cos_a, cos_b) = (alpha.to_radians().cos(), beta.to_radians().cos());
+        let falloff = |c: f64| {
+            let t = ((c - cos_a) / (cos_b - cos_a)).clamp(0.0, 1.0);
+            if quartic {
+                t.powi(4)
+            } else {
+                t * t * (3.0 - 2.0 * t)
+            }
+        };
+        let scale = PLANE_ALBEDO / PI * intensity.max_element();
+        let check = check_plane_pixels(
+            &outcome.image,
+            &desc,
+            |p| {
+                let to_light = position - p;
+                let d = to_light.length();
+                let f = falloff(-to_light.dot(axis) / d);
+                let e = intensity * f * (to_light.y / d) / (d * d);
+                (PLANE_ALBEDO / PI * e, (f < 0.05).then_some(1e-3 * scale))
+            },
+            |_, _| None,
+            DVec3::ZERO,
+            1e-3,
+        );
+        eprintln!(
+            "pbrt spot (quartic {quartic}): worst relative error {:.2e}",
+            check.worst
+        );
+    }
+}
+
+#[test]
+fn a_pbrt_constant_environment_gives_the_plane_pi_l() {
+    let radiance = DVec3::new(0.5, 0.25, 1.0);
+    let (outcome, desc) = render_pbrt(&pbrt_plane(
+        "LightSource \"infinite\" \"rgb L\" [0.5 0.25 1]",
+        "WorldEnd\n",
+    ));
+    let check = check_plane_pixels(
+        &outcome.image,
+        &desc,
+        |_| (PLANE_ALBEDO * radiance, None),
+        |_, _| None,
+        radiance,
+        1e-3,
+    );
+    eprintln!("pbrt environment: worst relative error {:.2e}", check.worst);
+}
+
+#[test]
+fn pbrt_lights_and_tints_map_onto_dpms() {
+    let (scene, report) = loads(&world(
+        "LightSource \"distant\" \"point from\" [0 1 0] \"point to\" [0 0 0] \"rgb L\" [2 2 2] \"float scale\" 1.5\n\
+         AttributeBegin\n AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\n\
+         Shape \"trianglemesh\" \"point3 P\" [0 2 0  1 2 0  0 2 1]\nAttributeEnd\n\
+         Material \"glass\" \"rgb Kr\" [0.9 0.9 0.9] \"rgb Kt\" [0.5 1 1]\nShape \"sphere\"\n\
+         Material \"mirror\"\nShape \"sphere\"\n",
+    ));
+    let Light::Distant {
+        direction,
+        irradiance,
+    } = scene.lights[1]
+    else {
+        panic!("{:?}", scene.lights)
+    };
+    assert!(close(direction, -Vec3::Y) && close(irradiance, Vec3::splat(3.0)));
+    let Light::Mesh {
+        ref mesh,
+        power,
+        two_sided,
+    } = scene.lights[2]
+    else {
+        panic!("{:?}", scene.lights)
+    };
+    // Φ = 2π · A · L for a two-sided emitter of area ½.
+    assert!(
+        two_sided && mesh.triangles.len() == 1 && (power.x - std::f32::consts::PI).abs() < 1e-5,
+        "{power}"
+    );
+    assert_eq!(
+        scene.materials[0],
+        Material::Glass {
+            ior: 1.5,
+            reflect_tint: Vec3::splat(0.9),
+            transmit_tint: Vec3::new(0.5, 1.0, 1.0)
+        }
+    );
+    assert_eq!(
+        scene.materials[1],
+        Material::Mirror {
+            tint: Vec3::splat(0.9)
+        },
+        "pbrt-v3's mirror reflects 0.9 by default"
+    );
+    assert!(
+        report.notes.iter().any(|n| n.contains("pbrt-v3")),
+        "{:?}",
+        report.notes
+    );
 }
 
 #[test]

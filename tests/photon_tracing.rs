@@ -6,7 +6,7 @@
 mod support;
 
 use dpm::estimate::{KnnEstimate, Query, RadialKernel, RadianceEstimate, Scratch};
-use dpm::photon::tracer::{MapKind, TraceCounts, trace_map, trace_photons};
+use dpm::photon::tracer::{MapKind, trace_map, trace_photons};
 use dpm::photon::{Neighbours, PhotonMap};
 use dpm::render::PinholeCamera;
 use dpm::render::pipeline;
@@ -15,53 +15,8 @@ use dpm::world::{Surface, World};
 use glam::{DVec3, Vec3};
 use indicatif::ProgressBar;
 use std::f64::consts::PI;
+use support::photons::*;
 use support::*;
-
-fn trace(world: &World, kind: MapKind, target: usize, seed: u64) -> (PhotonMap, TraceCounts) {
-    in_pool(2, || {
-        trace_map(world, kind, target, seed, &ProgressBar::hidden())
-    })
-}
-
-const GLOBAL_ALL: MapKind = MapKind::Global { with_direct: true };
-
-/// A diffuse 4 × 4 quad at y = 0 (x, z in [-2, 2]) under `light` (TOML of one `[[lights]]`).
-fn plane_scene(light: &str, half: f64) -> String {
-    let (c, e) = (-half, 2.0 * half);
-    format!(
-        r#"
-[camera]
-position = [0.0, 2.5, 3.0]
-look_at = [0.0, 0.0, 0.0]
-up = [0.0, 1.0, 0.0]
-fov_y = 45.0
-resolution = [16, 12]
-
-[[lights]]
-{light}
-
-[materials.grey]
-type = "diffuse"
-albedo = [0.5, 0.5, 0.5]
-
-[[objects]]
-type = "quad"
-corner = [{c}, 0.0, {c}]
-edge_u = [0.0, 0.0, {e}]
-edge_v = [{e}, 0.0, 0.0]
-material = "grey"
-"#
-    )
-}
-
-const POINT_LIGHT: &str =
-    "type = \"point\"\nposition = [0.0, 1.0, 0.0]\npower = [100.0, 100.0, 100.0]";
-
-/// Fraction of an isotropic point source's power that crosses a `2a × 2b` rectangle centred
-/// under it at distance `h`: Ω / 4π with Ω = 4 asin(ab / √((a² + h²)(b² + h²))).
-fn rectangle_fraction(a: f64, b: f64, h: f64) -> f64 {
-    4.0 * (a * b / ((a * a + h * h) * (b * b + h * h)).sqrt()).asin() / (4.0 * PI)
-}
 
 /// Irradiance on the plane y = 0 at horizontal distance `rho` from the foot of a point light
 /// at height `h`: Φ/(4π) cos θ / d² = Φ/(4π) h / (h² + ρ²)^{3/2}.
@@ -204,24 +159,6 @@ fn point_light_irradiance_and_stored_power_match_the_analytic_values() {
     );
 }
 
-/// Checks the fraction of paths that store a photon, and the stored power, on a lone plane.
-fn assert_stored_power(text: &str, phi: f64, fraction: f64, target: usize, tolerance: f64) {
-    let world = world(text);
-    let (map, counts) = trace(&world, GLOBAL_ALL, target, 5);
-    let got = counts.stored as f64 / counts.emitted.max(1) as f64;
-    let total = dvec(map.total_power());
-    eprintln!("{counts:?}: stored/emitted {got}, stored power {total}");
-    assert!(
-        rel_err(got, fraction) < tolerance,
-        "stored/emitted {got} ({counts:?}) vs the analytic fraction {fraction}"
-    );
-    assert!(
-        rel_err(total.x, phi * fraction) < tolerance + 0.004,
-        "stored power {total} vs {}",
-        phi * fraction
-    );
-}
-
 /// A sphere light (radius 0.05) in place of the point light: a uniformly emitting sphere
 /// gives every point that sees all of it the irradiance of a point light at its centre, so
 /// the plane receives the same fraction Ω/4π = 0.29517 of its power. 10 000 photons: σ =
@@ -231,7 +168,7 @@ fn sphere_light_photons_reach_the_plane() {
     let light =
         "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 0.05\npower = [100.0, 100.0, 100.0]";
     let p = rectangle_fraction(2.0, 2.0, 1.0);
-    assert_stored_power(&plane_scene(light, 2.0), 100.0, p, 10_000, 0.035);
+    assert_stored_power(&square_plane_scene(light, 2.0), 100.0, p, 10_000, 0.035);
 }
 
 /// A 0.5 × 0.5 quad light facing down 1 m above a 200 × 200 plane: a Lambertian emitter sends
@@ -240,7 +177,7 @@ fn sphere_light_photons_reach_the_plane() {
 #[test]
 fn quad_light_photons_reach_the_plane() {
     let light = "type = \"quad\"\ncorner = [-0.25, 1.0, -0.25]\nedge_u = [0.5, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.5]\npower = [100.0, 100.0, 100.0]";
-    assert_stored_power(&plane_scene(light, 100.0), 100.0, 1.0, 5_000, 0.01);
+    assert_stored_power(&square_plane_scene(light, 100.0), 100.0, 1.0, 5_000, 0.01);
 }
 
 /// The point light over a 200 × 200 plane sends (almost exactly) half its power down:
@@ -249,7 +186,13 @@ fn quad_light_photons_reach_the_plane() {
 fn point_light_sends_half_its_power_into_a_huge_plane() {
     let p = rectangle_fraction(100.0, 100.0, 1.0);
     assert!((p - 0.5).abs() < 0.01);
-    assert_stored_power(&plane_scene(POINT_LIGHT, 100.0), 100.0, p, 20_000, 0.03);
+    assert_stored_power(
+        &square_plane_scene(POINT_LIGHT, 100.0),
+        100.0,
+        p,
+        20_000,
+        0.03,
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -560,7 +503,7 @@ fn sphere_hits_resolve_to_unit_outward_normals() {
         "type = \"sphere\"\ncenter = [{}, {}, {}]\nradius = {lr}\npower = [1.0, 1.0, 1.0]",
         lc.x, lc.y, lc.z
     );
-    let world = support::world(&format!("{}\n{objects}", plane_scene(&light, 2.0)));
+    let world = support::world(&format!("{}\n{objects}", square_plane_scene(&light, 2.0)));
     let mut rng = dpm::sampling::Rng::for_index(11, dpm::sampling::Stream::Pixels, 0);
     let mut hits = 0;
     for (center, radius) in spheres {

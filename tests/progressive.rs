@@ -1,6 +1,6 @@
 //! Progressive rendering (issue 14): passes independent of what came before them, films that
 //! merge and resume to exactly the run that rendered every pass at once, refusals of films that
-//! do not belong together, thread-count invariance over several passes, the time budget, the
+//! do not belong together (another seed, setting or resolution), thread-count invariance over several passes, the time budget, the
 //! radius schedule on every estimate, and the EXR layers.
 
 mod support;
@@ -127,6 +127,7 @@ fn merge_refuses_overlaps_and_films_of_another_render() {
     let seed = film("seed.film", &["--first-pass", "2", "--seed", "5"]);
     let k = film("k.film", &["--first-pass", "2", "--global-k", "40"]);
     let p3 = film("p3.film", &["--first-pass", "3"]);
+    let wide = film("wide.film", &["--first-pass", "2", "--resolution", "48x30"]);
     let out = d("m.pfm");
     let refused = |films: &[&Path], fragments: &[&str]| {
         let e = merge::run(&merge_args(films, &out, None)).expect_err("refused");
@@ -140,6 +141,7 @@ fn merge_refuses_overlaps_and_films_of_another_render() {
     refused(&[&p01, &p12], &["p12.film", "p01.film", "both hold pass 1"]);
     refused(&[&p01, &seed], &["seed.film", "differ in seed"]);
     refused(&[&p01, &k], &["k.film", "differ in settings"]);
+    refused(&[&p01, &wide], &["wide.film", "differ in resolution"]);
     // A gap is merged, and named.
     let merged = merge::run(&merge_args(&[&p01, &p3], &out, None)).expect("merge with a gap");
     assert_eq!(merged.missing_text().as_deref(), Some("pass 2 is missing"));
@@ -157,6 +159,13 @@ fn merge_refuses_overlaps_and_films_of_another_render() {
     let e = pipeline::run(&render_args(&args)).err().expect("refused");
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("seed differs"), "{e}");
+    // So is a resume at another --resolution.
+    let mut args = vec![path_str(&scene), "-o", path_str(&out)];
+    args.extend_from_slice(&FAST);
+    args.extend_from_slice(&["--resume", path_str(&p01), "--resolution", "48x30"]);
+    let e = pipeline::run(&render_args(&args)).err().expect("refused");
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("resolution differs"), "{e}");
 }
 
 #[test]

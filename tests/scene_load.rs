@@ -109,6 +109,7 @@ fn every_scene_in_scenes_loads() {
             "cornell-point.toml",
             "metal-ring.toml",
             "point-plane.toml",
+            "spot-and-sky.toml",
             "torus-knot.toml"
         ]
     );
@@ -120,6 +121,7 @@ fn scenes_use_every_light_and_material_kind() {
         "cornell-box.toml",
         "metal-ring.toml",
         "point-plane.toml",
+        "spot-and-sky.toml",
         "torus-knot.toml",
     ]
     .map(load_scene);
@@ -127,18 +129,53 @@ fn scenes_use_every_light_and_material_kind() {
     assert!(lights.iter().any(|l| matches!(l, Light::Point { .. })));
     assert!(lights.iter().any(|l| matches!(l, Light::Sphere { .. })));
     assert!(lights.iter().any(|l| matches!(l, Light::Quad { .. })));
+    assert!(lights.iter().any(|l| matches!(
+        l,
+        Light::Spot {
+            falloff: scene::SpotFalloff::Quartic,
+            ..
+        }
+    )));
+    assert!(lights.iter().any(|l| matches!(l, Light::Distant { .. })));
+    assert!(
+        lights
+            .iter()
+            .any(|l| matches!(l, Light::Environment { .. }))
+    );
+    assert!(lights.iter().any(|l| matches!(
+        l,
+        Light::Mesh {
+            two_sided: true,
+            ..
+        }
+    )));
     let materials: Vec<&Material> = scenes.iter().flat_map(|s| &s.materials).collect();
     assert!(
         materials
             .iter()
             .any(|m| matches!(m, Material::Diffuse { .. }))
     );
-    assert!(materials.iter().any(|m| matches!(m, Material::Mirror)));
+    assert!(
+        materials
+            .iter()
+            .any(|m| matches!(m, Material::Mirror { .. }))
+    );
     assert!(
         materials
             .iter()
             .any(|m| matches!(m, Material::Glass { .. }))
     );
+    // Tints away from their defaults, every one.
+    let tinted = |v: &Vec3| *v != Vec3::ONE;
+    assert!(
+        materials
+            .iter()
+            .any(|m| matches!(m, Material::Mirror { tint } if tinted(tint)))
+    );
+    assert!(materials.iter().any(|m| matches!(
+        m,
+        Material::Glass { reflect_tint, transmit_tint, .. } if tinted(reflect_tint) && tinted(transmit_tint)
+    )));
 }
 
 #[test]
@@ -157,7 +194,7 @@ fn torus_knot_is_closed_glass_floating_over_the_floor_under_a_small_light() {
     assert_eq!(knot.positions.len(), 600 * 24);
     assert_eq!(
         scene.materials[knot.material as usize],
-        Material::Glass { ior: 1.5 }
+        Material::clear_glass(1.5)
     );
     assert!(matches!(
         scene.materials[floor.material as usize],
@@ -221,7 +258,7 @@ fn metal_ring_is_a_squashed_mirror_shell_lit_from_a_low_angle() {
         3 * 720 * 2,
         "inner wall, outer wall, rim"
     );
-    assert_eq!(scene.materials[ring.material as usize], Material::Mirror);
+    assert_eq!(scene.materials[ring.material as usize], Material::MIRROR);
     assert_normals_agree_with_winding(ring, "metal ring");
 
     let (min, max) = bounds(ring);
@@ -297,11 +334,11 @@ fn cornell_box_walls_face_inward_around_a_mirror_and_a_glass_sphere() {
         })
         .collect();
     assert_eq!(sphere_materials.len(), 2);
-    assert!(sphere_materials.contains(&&Material::Mirror));
+    assert!(sphere_materials.contains(&&Material::MIRROR));
     assert!(
         sphere_materials
             .iter()
-            .any(|m| matches!(m, Material::Glass { ior } if (*ior - 1.5).abs() < 1e-6))
+            .any(|m| matches!(m, Material::Glass { ior, .. } if (*ior - 1.5).abs() < 1e-6))
     );
 }
 
@@ -396,11 +433,11 @@ fn mtl_materials_map_to_diffuse_mirror_and_glass() {
             },
             2,
         ),
-        (Material::Mirror, 1),
-        (Material::Mirror, 1),
-        (Material::Glass { ior: 1.45 }, 1),
-        (Material::Glass { ior: 1.33 }, 1),
-        (Material::Glass { ior: 1.6 }, 1),
+        (Material::MIRROR, 1),
+        (Material::MIRROR, 1),
+        (Material::clear_glass(1.45), 1),
+        (Material::clear_glass(1.33), 1),
+        (Material::clear_glass(1.6), 1),
         (
             Material::Diffuse {
                 albedo: Vec3::splat(0.3),
@@ -462,52 +499,76 @@ fn fixture_scene(objects: &str) -> String {
 /// the scene (relative to bad/), line, field, a fragment of the message).
 #[rustfmt::skip]
 const MALFORMED: &[(&str, Option<&str>, usize, &str, &str)] = &[
-    ("syntax",              None,                                 6,  "camera.up",                    "syntax"),
-    ("duplicate_key",       None,                                 7,  "camera.fov_y",                 "syntax"),
-    ("unknown_field",       None,                                 21, "objects[0].radiuss",           "unknown field"),
-    ("missing_field",       None,                                 18, "objects[0].radius",            "missing field"),
-    ("wrong_type",          None,                                 6,  "camera.fov_y",                 "invalid type"),
-    ("wrong_length",        None,                                 3,  "camera.position",              "invalid length"),
-    ("nan_radius",          None,                                 21, "objects[0].radius",            "greater than 0"),
-    ("negative_power",      None,                                 12, "lights[0].power[1]",           ">= 0"),
-    ("zero_power",          None,                                 12, "lights[0].power",              "emits nothing"),
-    ("inf_position",        None,                                 11, "lights[0].position[1]",        "not a finite number"),
-    ("albedo_above_one",    None,                                 16, "materials.white.albedo[0]",    "not in [0, 1]"),
-    ("ior_below_one",       None,                                 20, "materials.glass.ior",          ">= 1"),
-    ("fov_out_of_range",    None,                                 6,  "camera.fov_y",                 "(0, 180)"),
-    ("zero_resolution",     None,                                 7,  "camera.resolution[1]",         "at least 1"),
-    ("negative_resolution", None,                                 7,  "camera.resolution[0]",         "invalid value"),
-    ("up_parallel",         None,                                 5,  "camera.up",                    "parallel"),
-    ("look_at_is_position", None,                                 4,  "camera.look_at",               "equals camera.position"),
-    ("unknown_material",    None,                                 22, "objects[0].material",          "unknown material `whit`"),
-    ("unknown_light_type",  None,                                 10, "lights[0].type",               "unknown type `spot`"),
-    ("unknown_top_level",   None,                                 24, "render",                       "unknown field"),
-    ("missing_camera",      None,                                 1,  "camera",                       "missing field"),
-    ("no_lights",           None,                                 2,  "lights",                       "at least one"),
-    ("objects_not_array",   None,                                 18, "objects",                      "array of tables"),
-    ("mirror_with_field",   None,                                 20, "materials.chrome.reflectance", "unknown field"),
-    ("parallel_edges",      None,                                 28, "objects[1].edge_v",            "parallel"),
-    ("zero_edge",           None,                                 17, "lights[1].edge_u",             "zero length"),
-    ("negative_scale",      None,                                 28, "objects[1].scale[1]",          "greater than 0"),
-    ("missing_obj",         None,                                 26, "objects[1].file",              "cannot be read"),
-    ("mesh_is_directory",   None,                                 26, "objects[1].file",              "is a directory"),
-    ("empty_mesh",          None,                                 26, "objects[1].file",              "has no faces"),
-    ("all_degenerate",      None,                                 26, "objects[1].file",              "zero-area"),
-    ("no_mesh_material",    None,                                 24, "objects[1].material",          "no MTL material"),
-    ("nan_vertex",          Some("meshes/nan-vertex.obj"),        4,  "objects[1].file",              "not finite"),
-    ("face_out_of_range",   Some("meshes/face-out-of-range.obj"), 6,  "objects[1].file",              "out of bounds"),
-    ("bad_number",          Some("meshes/bad-number.obj"),        3,  "objects[1].file",              "position parse error"),
-    ("missing_mtl",         Some("meshes/missing-mtl.obj"),       2,  "objects[1].file",              "cannot be read"),
-    ("kd_above_one",        Some("meshes/bright.mtl"),            7,  "objects[1].file",              "not in [0, 1]"),
-    ("glass_without_ni",    Some("meshes/glass-no-ni.mtl"),       3,  "objects[1].file",              "needs Ni"),
-    ("not_utf8",            None,                                 2,  "scene",                        "not UTF-8"),
-    ("empty_file",          None,                                 1,  "camera",                       "missing field"),
-    ("negative_radius",     None,                                 21, "objects[0].radius",            "greater than 0"),
-    ("power_overflows",     None,                                 12, "lights[0].power[0]",           "must be finite"),
-    ("nan_camera",          None,                                 3,  "camera.position[0]",           "not a finite number"),
-    ("zero_light_radius",   None,                                 12, "lights[0].radius",             "greater than 0"),
-    ("mesh_not_obj",        None,                                 26, "objects[1].file",              "has no faces"),
-    ("string_resolution",   None,                                 7,  "camera.resolution[0]",         "invalid type"),
+    ("syntax",                        None,                                 6,  "camera.up",                       "syntax"),
+    ("duplicate_key",                 None,                                 7,  "camera.fov_y",                    "syntax"),
+    ("unknown_field",                 None,                                 21, "objects[0].radiuss",              "unknown field"),
+    ("missing_field",                 None,                                 18, "objects[0].radius",               "missing field"),
+    ("wrong_type",                    None,                                 6,  "camera.fov_y",                    "invalid type"),
+    ("wrong_length",                  None,                                 3,  "camera.position",                 "invalid length"),
+    ("nan_radius",                    None,                                 21, "objects[0].radius",               "greater than 0"),
+    ("negative_power",                None,                                 12, "lights[0].power[1]",              ">= 0"),
+    ("zero_power",                    None,                                 12, "lights[0].power",                 "emits nothing"),
+    ("inf_position",                  None,                                 11, "lights[0].position[1]",           "not a finite number"),
+    ("albedo_above_one",              None,                                 16, "materials.white.albedo[0]",       "not in [0, 1]"),
+    ("ior_below_one",                 None,                                 20, "materials.glass.ior",             ">= 1"),
+    ("fov_out_of_range",              None,                                 6,  "camera.fov_y",                    "(0, 180)"),
+    ("zero_resolution",               None,                                 7,  "camera.resolution[1]",            "at least 1"),
+    ("negative_resolution",           None,                                 7,  "camera.resolution[0]",            "invalid value"),
+    ("up_parallel",                   None,                                 5,  "camera.up",                       "parallel"),
+    ("look_at_is_position",           None,                                 4,  "camera.look_at",                  "equals camera.position"),
+    ("unknown_material",              None,                                 22, "objects[0].material",             "unknown material `whit`"),
+    ("unknown_light_type",            None,                                 10, "lights[0].type",                  "unknown type `goniometric`"),
+    ("unknown_top_level",             None,                                 24, "render",                          "unknown field"),
+    ("missing_camera",                None,                                 1,  "camera",                          "missing field"),
+    ("no_lights",                     None,                                 2,  "lights",                          "at least one"),
+    ("objects_not_array",             None,                                 18, "objects",                         "array of tables"),
+    ("mirror_with_field",             None,                                 20, "materials.chrome.reflectance",    "unknown field"),
+    ("parallel_edges",                None,                                 28, "objects[1].edge_v",               "parallel"),
+    ("zero_edge",                     None,                                 17, "lights[1].edge_u",                "zero length"),
+    ("negative_scale",                None,                                 28, "objects[1].scale[1]",             "greater than 0"),
+    ("missing_obj",                   None,                                 26, "objects[1].file",                 "cannot be read"),
+    ("mesh_is_directory",             None,                                 26, "objects[1].file",                 "is a directory"),
+    ("empty_mesh",                    None,                                 26, "objects[1].file",                 "has no faces"),
+    ("all_degenerate",                None,                                 26, "objects[1].file",                 "zero-area"),
+    ("no_mesh_material",              None,                                 24, "objects[1].material",             "no MTL material"),
+    ("nan_vertex",                    Some("meshes/nan-vertex.obj"),        4,  "objects[1].file",                 "not finite"),
+    ("face_out_of_range",             Some("meshes/face-out-of-range.obj"), 6,  "objects[1].file",                 "out of bounds"),
+    ("bad_number",                    Some("meshes/bad-number.obj"),        3,  "objects[1].file",                 "position parse error"),
+    ("missing_mtl",                   Some("meshes/missing-mtl.obj"),       2,  "objects[1].file",                 "cannot be read"),
+    ("kd_above_one",                  Some("meshes/bright.mtl"),            7,  "objects[1].file",                 "not in [0, 1]"),
+    ("glass_without_ni",              Some("meshes/glass-no-ni.mtl"),       3,  "objects[1].file",                 "needs Ni"),
+    ("not_utf8",                      None,                                 2,  "scene",                           "not UTF-8"),
+    ("empty_file",                    None,                                 1,  "camera",                          "missing field"),
+    ("negative_radius",               None,                                 21, "objects[0].radius",               "greater than 0"),
+    ("power_overflows",               None,                                 12, "lights[0].power[0]",              "must be finite"),
+    ("nan_camera",                    None,                                 3,  "camera.position[0]",              "not a finite number"),
+    ("zero_light_radius",             None,                                 12, "lights[0].radius",                "greater than 0"),
+    ("mesh_not_obj",                  None,                                 26, "objects[1].file",                 "has no faces"),
+    ("string_resolution",             None,                                 7,  "camera.resolution[0]",            "invalid type"),
+    ("spot_nan_direction",            None,                                 12, "lights[0].direction[0]",          "not a finite number"),
+    ("spot_zero_direction",           None,                                 12, "lights[0].direction",             "zero length"),
+    ("spot_cone_too_wide",            None,                                 13, "lights[0].cone_angle",            "not in (0, 180]"),
+    ("spot_zero_cone",                None,                                 13, "lights[0].cone_angle",            "not in (0, 180]"),
+    ("spot_falloff_past_cone",        None,                                 14, "lights[0].falloff_start",         "not in [0, 30]"),
+    ("spot_negative_falloff_start",   None,                                 13, "lights[0].falloff_start",         "not in [0, 30]"),
+    ("spot_unknown_falloff",          None,                                 13, "lights[0].falloff",               "unknown falloff `linear`"),
+    ("spot_negative_power",           None,                                 13, "lights[0].power[2]",              "must be finite and >= 0"),
+    ("distant_zero_direction",        None,                                 11, "lights[0].direction",             "zero length"),
+    ("distant_nan_irradiance",        None,                                 12, "lights[0].irradiance[1]",         "W/m² must be finite"),
+    ("distant_zero_irradiance",       None,                                 12, "lights[0].irradiance",            "zero in every channel"),
+    ("environment_negative_radiance", None,                                 11, "lights[0].radiance[0]",           "W/(m² sr) must be finite"),
+    ("environment_infinite_radiance", None,                                 11, "lights[0].radiance[2]",           "must be finite"),
+    ("environment_zero_radiance",     None,                                 11, "lights[0].radiance",              "zero in every channel"),
+    ("mesh_light_negative_power",     None,                                 12, "lights[0].power[0]",              "must be finite and >= 0"),
+    ("mesh_light_zero_scale",         None,                                 12, "lights[0].scale",                 "greater than 0"),
+    ("mesh_light_missing_file",       None,                                 11, "lights[0].file",                  "cannot be read"),
+    ("mesh_light_with_material",      None,                                 12, "lights[0].material",              "unknown field"),
+    ("mesh_light_two_sided_string",   None,                                 13, "lights[0].two_sided",             "expected a boolean"),
+    ("mirror_tint_above_one",         None,                                 20, "materials.chrome.tint[0]",        "not in [0, 1]"),
+    ("mirror_tint_nan",               None,                                 20, "materials.chrome.tint[1]",        "not in [0, 1]"),
+    ("glass_reflect_tint_negative",   None,                                 21, "materials.glass.reflect_tint[2]", "not in [0, 1]"),
+    ("glass_transmit_tint_above_one", None,                                 21, "materials.glass.transmit_tint[1]","not in [0, 1]"),
+    ("ks_above_one",                  Some("meshes/bright-mirror.mtl"),     7,  "objects[1].file",                 "Ks channel 1.2"),
 ];
 
 #[test]

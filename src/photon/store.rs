@@ -24,11 +24,13 @@
 //! header says (truncated), a checksum mismatch (corrupt), and impossible contents. Writing is
 //! atomic (temporary file, sync, rename), like the images.
 
+mod fingerprint;
+
+pub use fingerprint::{Fnv64, scene_fingerprint};
+
 use super::tracer::MapKind;
 use super::{Photon, PhotonMap};
 use crate::image_io::{self, ImageError};
-use crate::scene::{Light, Material, SceneDescription, Shape};
-use glam::Vec3;
 use std::fs::File;
 use std::io::{self, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
@@ -116,127 +118,6 @@ impl StoreError {
             _ => 2,
         }
     }
-}
-
-/// FNV-1a, 64 bit: the file checksum and the scene fingerprint.
-#[derive(Clone, Copy, Debug)]
-pub struct Fnv64(u64);
-
-impl Default for Fnv64 {
-    fn default() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv64 {
-    pub fn update(&mut self, bytes: &[u8]) {
-        let mut h = self.0;
-        for &b in bytes {
-            h ^= b as u64;
-            h = h.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        self.0 = h;
-    }
-    pub fn finish(&self) -> u64 {
-        self.0
-    }
-    fn u32(&mut self, x: u32) {
-        self.update(&x.to_le_bytes());
-    }
-    fn u64(&mut self, x: u64) {
-        self.update(&x.to_le_bytes());
-    }
-    fn f32(&mut self, x: f32) {
-        self.u32(x.to_bits());
-    }
-    fn vec3(&mut self, v: Vec3) {
-        v.to_array().into_iter().for_each(|x| self.f32(x));
-    }
-}
-
-/// A fingerprint of everything photon tracing reads from a scene: lights, materials and
-/// shapes after loading (mesh files included, since their triangles are), bit for bit. The
-/// camera is left out: a map stays valid for another view or resolution of the same scene.
-pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
-    let mut h = Fnv64::default();
-    h.update(b"dpm photon scene v1");
-    h.u64(scene.lights.len() as u64);
-    for light in &scene.lights {
-        match light {
-            Light::Point { position, power } => {
-                h.u32(0);
-                h.vec3(*position);
-                h.vec3(*power);
-            }
-            Light::Sphere {
-                center,
-                radius,
-                power,
-            } => {
-                h.u32(1);
-                h.vec3(*center);
-                h.f32(*radius);
-                h.vec3(*power);
-            }
-            Light::Quad {
-                corner,
-                edge_u,
-                edge_v,
-                power,
-            } => {
-                h.u32(2);
-                h.vec3(*corner);
-                h.vec3(*edge_u);
-                h.vec3(*edge_v);
-                h.vec3(*power);
-            }
-        }
-    }
-    h.u64(scene.materials.len() as u64);
-    for material in &scene.materials {
-        match material {
-            Material::Diffuse { albedo } => {
-                h.u32(0);
-                h.vec3(*albedo);
-            }
-            Material::Mirror => h.u32(1),
-            Material::Glass { ior } => {
-                h.u32(2);
-                h.f32(*ior);
-            }
-        }
-    }
-    h.u64(scene.shapes.len() as u64);
-    for shape in &scene.shapes {
-        match shape {
-            Shape::Sphere {
-                center,
-                radius,
-                material,
-            } => {
-                h.u32(0);
-                h.vec3(*center);
-                h.f32(*radius);
-                h.u32(*material);
-            }
-            Shape::Triangles(mesh) => {
-                h.u32(1);
-                h.u32(mesh.material);
-                h.u64(mesh.positions.len() as u64);
-                mesh.positions.iter().for_each(|&p| h.vec3(p));
-                match &mesh.normals {
-                    Some(normals) => {
-                        h.u32(1);
-                        normals.iter().for_each(|&n| h.vec3(n));
-                    }
-                    None => h.u32(0),
-                }
-                h.u64(mesh.triangles.len() as u64);
-                mesh.triangles.iter().flatten().for_each(|&i| h.u32(i));
-            }
-        }
-    }
-    h.finish()
 }
 
 fn kind_code(kind: MapKind) -> u32 {

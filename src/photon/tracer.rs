@@ -65,11 +65,8 @@ struct LightChooser {
 
 impl LightChooser {
     fn new(world: &World) -> Option<Self> {
-        let w: Vec<f32> = world
-            .description
-            .lights
-            .iter()
-            .map(|l| lights::weight(lights::power(l)))
+        let w: Vec<f32> = (world.light_sources.iter())
+            .map(|l| lights::weight(l.power()))
             .collect();
         let total: f32 = w.iter().sum();
         if total.is_nan() || total <= 0.0 || !total.is_finite() {
@@ -122,7 +119,7 @@ impl<'w> Emitter<'w> {
         Some(Self {
             world,
             chooser: LightChooser::new(world)?,
-            lights: (world.description.lights.iter())
+            lights: (world.light_sources.iter())
                 .map(|light| LightEmitter::new(light, aim))
                 .collect(),
             streams: StreamSeed::new(seed, stream),
@@ -531,23 +528,42 @@ fn advance(
             path.diffuse_seen = true;
             cosine_hemisphere(ns, path.rng.next_2d())
         }
-        Material::Mirror => {
+        Material::Mirror { tint } => {
             if kind == MapKind::Caustic && path.diffuse_seen {
                 return false;
             }
             path.specular_seen = true;
+            path.flux *= *tint;
             reflect(d, ns)
         }
-        Material::Glass { ior } => {
+        Material::Glass {
+            ior,
+            reflect_tint,
+            transmit_tint,
+        } => {
             path.specular_seen = true;
             let eta = if entering { 1.0 / ior } else { *ior };
-            scatter_dielectric(d, ns, eta, path.rng.next_f32())
+            // The branch is drawn with its Fresnel probability, so the flux that goes on is
+            // the tint's share alone.
+            let (next, branch) = scatter_dielectric(d, ns, eta, path.rng.next_f32());
+            path.flux *= branch.pick(*reflect_tint, *transmit_tint);
+            next
         }
     };
+    if specular_tinted_out(material, path.flux) {
+        // A tint took everything: nothing left to store.
+        return false;
+    }
     path.bounces += 1;
     // Leave the surface on the side the new direction points to.
     let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
     path.origin = hit.position + side * eps;
     path.direction = next;
     path.bounces < MAX_BOUNCES
+}
+
+/// Whether a mirror's or glass's tint has left a path nothing to carry.
+#[inline(always)]
+fn specular_tinted_out(material: &Material, flux: Vec3) -> bool {
+    !matches!(material, Material::Diffuse { .. }) && flux.max_element() <= 0.0
 }

@@ -1,5 +1,6 @@
 //! The eye pass's integrator: Whitted-style recursion through mirrors and glass (Fresnel, total
-//! internal reflection) to a depth limit; at diffuse surfaces direct light by shadow rays, the
+//! internal reflection, each branch scaled by its tint) to a depth limit, rays that leave the
+//! scene seeing the environment; at diffuse surfaces direct light by shadow rays, the
 //! caustic map's estimate, and indirect light from the global map (final gathering, reading
 //! the precomputed irradiance where there is one, or the map shown directly). Radiance comes back split into its direct, caustic and indirect parts,
 //! the film's layers. Knows nothing of passes or pixels: a camera path brings its own
@@ -9,8 +10,7 @@ use crate::estimate::{PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
 use crate::sampling::{PathSampler, cosine_hemisphere};
-use crate::scene::{Light, Material};
-use crate::world::lights::{emitted_radiance, sample_incident};
+use crate::scene::Material;
 use crate::world::{Surface, World};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -47,7 +47,8 @@ impl std::ops::AddAssign for Radiance {
     }
 }
 
-impl std::ops::Mul<Radiance> for f32 {
+/// Scaled channel by channel (a tint).
+impl std::ops::Mul<Radiance> for Vec3 {
     type Output = Radiance;
     fn mul(self, r: Radiance) -> Radiance {
         Radiance {
@@ -55,6 +56,13 @@ impl std::ops::Mul<Radiance> for f32 {
             caustic: self * r.caustic,
             indirect: self * r.indirect,
         }
+    }
+}
+
+impl std::ops::Mul<Radiance> for f32 {
+    type Output = Radiance;
+    fn mul(self, r: Radiance) -> Radiance {
+        Vec3::splat(self) * r
     }
 }
 
@@ -91,8 +99,8 @@ pub struct Integrator<'a> {
     pub indirect: Indirect<'a>,
     /// Specular bounces followed from the eye.
     pub max_depth: u32,
-    /// Shadow rays per area light (sphere or quad) at each diffuse eye hit; a point light
-    /// takes one.
+    /// Shadow rays per area light (sphere, quad, mesh) and environment at each diffuse eye
+    /// hit; a point, spot or distant light takes one.
     pub light_samples: u32,
     /// Glass hits at depth below this follow both rays; deeper ones follow one, chosen with
     /// the Fresnel reflectance as probability (the same expectation, fewer rays).
@@ -113,13 +121,16 @@ impl Integrator<'_> {
         scratch: &mut Scratch,
     ) -> Radiance {
         let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-            return Radiance::default();
+            return Radiance {
+                direct: self.world.background(),
+                ..Radiance::default()
+            };
         };
         let m = match hit.surface {
             Surface::Light(l) => {
-                let light = &self.world.description.lights[l];
+                let light = &self.world.light_sources[l];
                 return Radiance {
-                    direct: emitted_radiance(light, -dir.dot(hit.geometric_normal)),
+                    direct: light.emitted_radiance(-dir.dot(hit.geometric_normal)),
                     ..Radiance::default()
                 };
             }
@@ -145,46 +156,53 @@ impl Integrator<'_> {
                     indirect: *albedo * self.indirect(p, ns, at, &query, sampler, scratch),
                 }
             }
-            Material::Mirror if depth < self.max_depth => {
+            Material::Mirror { tint } if depth < self.max_depth => {
                 let r = reflect(dir, ns);
-                self.radiance(
-                    self.spawn(hit.position, ng, r),
-                    r,
-                    depth + 1,
-                    sampler,
-                    scratch,
-                )
+                *tint
+                    * self.radiance(
+                        self.spawn(hit.position, ng, r),
+                        r,
+                        depth + 1,
+                        sampler,
+                        scratch,
+                    )
             }
-            Material::Glass { ior } if depth < self.max_depth => {
+            Material::Glass {
+                ior,
+                reflect_tint,
+                transmit_tint,
+            } if depth < self.max_depth => {
                 let entering = hit.entering(dir);
                 let eta = if entering { 1.0 / ior } else { *ior };
                 let f = fresnel_dielectric(-dir.dot(ns), eta);
                 let r = reflect(dir, ns);
                 if depth >= self.glass_split_depth {
                     // One ray: reflection with probability F (always under total internal
-                    // reflection), else refraction, each with weight 1.
+                    // reflection), else refraction, each with weight 1 times its tint.
                     let refracted = refract(dir, ns, eta).filter(|_| f < 1.0);
-                    let next = match refracted {
-                        Some(t) if sampler.rng.next_f32() >= f => t,
-                        _ => r,
+                    let (next, tint) = match refracted {
+                        Some(t) if sampler.rng.next_f32() >= f => (t, transmit_tint),
+                        _ => (r, reflect_tint),
                     };
-                    return self.radiance(
-                        self.spawn(hit.position, ng, next),
-                        next,
+                    return *tint
+                        * self.radiance(
+                            self.spawn(hit.position, ng, next),
+                            next,
+                            depth + 1,
+                            sampler,
+                            scratch,
+                        );
+                }
+                let mut l = (f * *reflect_tint)
+                    * self.radiance(
+                        self.spawn(hit.position, ng, r),
+                        r,
                         depth + 1,
                         sampler,
                         scratch,
                     );
-                }
-                let mut l = f * self.radiance(
-                    self.spawn(hit.position, ng, r),
-                    r,
-                    depth + 1,
-                    sampler,
-                    scratch,
-                );
                 if let Some(t) = refract(dir, ns, eta).filter(|_| f < 1.0) {
-                    l += (1.0 - f)
+                    l += ((1.0 - f) * *transmit_tint)
                         * self.radiance(
                             self.spawn(hit.position, ng, t),
                             t,
@@ -209,18 +227,20 @@ impl Integrator<'_> {
     }
 
     /// Direct irradiance at `p` with normal `n` (diffuse hit `at` of the path): the mean of
-    /// `light_samples` shadow-tested samples per area light, stratified (see
-    /// [`PathSampler::light_2d`]), and one per point light, which has nothing to stratify.
+    /// `light_samples` shadow-tested samples per area light and environment, stratified (see
+    /// [`PathSampler::light_2d`]), and one per point, spot or distant light, which have
+    /// nothing to stratify.
     fn direct(&self, p: Vec3, n: Vec3, at: u32, sampler: &mut PathSampler) -> Vec3 {
         let mut e = Vec3::ZERO;
-        for (l, light) in self.world.description.lights.iter().enumerate() {
-            let count = match light {
-                Light::Point { .. } => 1,
-                _ => self.light_samples.max(1),
+        for (l, light) in self.world.light_sources.iter().enumerate() {
+            let count = if light.is_delta() {
+                1
+            } else {
+                self.light_samples.max(1)
             };
             let mut sum = Vec3::ZERO;
             for j in 0..count {
-                let Some(s) = sample_incident(light, p, sampler.light_2d(at, l, j, count)) else {
+                let Some(s) = light.sample_incident(p, n, sampler.light_2d(at, l, j, count)) else {
                     continue;
                 };
                 let cos = n.dot(s.direction);
@@ -281,6 +301,8 @@ impl Integrator<'_> {
         rng: &mut crate::sampling::Rng,
         scratch: &mut Scratch,
     ) -> Vec3 {
+        // What the specular bounces so far let through: their tints.
+        let mut throughput = Vec3::ONE;
         for _ in 0..=GATHER_SPECULAR_DEPTH {
             let Some(hit) = self.world.intersect(o, d, 0.0, f32::INFINITY) else {
                 break;
@@ -301,12 +323,21 @@ impl Integrator<'_> {
                     let e = precomputed
                         .and_then(|t| t.lookup(&q, scratch))
                         .unwrap_or_else(|| map.irradiance(&q, scratch));
-                    return *albedo * FRAC_1_PI * e;
+                    return throughput * *albedo * FRAC_1_PI * e;
                 }
-                Material::Mirror => reflect(d, ns),
-                Material::Glass { ior } => {
+                Material::Mirror { tint } => {
+                    throughput *= *tint;
+                    reflect(d, ns)
+                }
+                Material::Glass {
+                    ior,
+                    reflect_tint,
+                    transmit_tint,
+                } => {
                     let eta = if hit.entering(d) { 1.0 / ior } else { *ior };
-                    scatter_dielectric(d, ns, eta, rng.next_f32())
+                    let (next, branch) = scatter_dielectric(d, ns, eta, rng.next_f32());
+                    throughput *= branch.pick(*reflect_tint, *transmit_tint);
+                    next
                 }
             };
             o = self.spawn(hit.position, ng, next);

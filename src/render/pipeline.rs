@@ -103,6 +103,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "IMAGE")]
     pub reference: Option<PathBuf>,
 
+    /// Render at WIDTHxHEIGHT pixels instead of the scene's `resolution` (e.g. 1280x720). The
+    /// vertical field of view stays the scene's `fov_y`, so a wider image sees more at the
+    /// sides. A film remembers its resolution: --resume and `dpm merge` refuse another.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution, allow_hyphen_values = true)]
+    pub resolution: Option<(u32, u32)>,
+
     /// Camera samples per pixel in each pass, stratified within the pixel across samples and
     /// passes (one Owen-scrambled Sobol sequence per pixel).
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
@@ -146,8 +152,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true)]
     pub irradiance_stride: usize,
 
-    /// Shadow rays per area light (sphere or quad) at each diffuse eye hit, stratified and
-    /// averaged; a point light takes one.
+    /// Shadow rays per area light (sphere, quad or mesh) and per environment at each diffuse
+    /// eye hit, stratified and averaged; a point, spot or distant light takes one.
     #[arg(
         long,
         value_name = "N",
@@ -382,6 +388,23 @@ pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
     pool.install(|| run_in_pool(args, output))
 }
 
+/// `--resolution`'s value: two whole numbers >= 1 joined by `x` (`1280x720`).
+pub fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
+    let wanted = "expected WIDTHxHEIGHT in pixels, e.g. 1280x720";
+    let (width, height) = text
+        .trim()
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("no `x` between width and height: {wanted}"))?;
+    let side = |what: &str, value: &str| match value.trim().parse::<u32>() {
+        Ok(0) => Err(format!("the {what} is 0: it must be at least 1 pixel")),
+        Ok(pixels) => Ok(pixels),
+        Err(_) => Err(format!(
+            "the {what} `{value}` is not a whole number of pixels: {wanted}"
+        )),
+    };
+    Ok((side("width", width)?, side("height", height)?))
+}
+
 /// Most shadow rays per area light a diffuse hit may take (more is a typo, not a setting).
 pub const MAX_LIGHT_SAMPLES: u32 = 4096;
 /// Largest `--irradiance-stride`: beyond it the table is too sparse to stand for the map.
@@ -445,12 +468,17 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     embree::enable_flush_to_zero();
     let run_start = Instant::now();
     let mut times = PhaseTimes::new();
-    let (description, report) = times.time("load scene", || {
+    let (mut description, report) = times.time("load scene", || {
         let options = scene::LoadOptions {
             strict: args.strict,
         };
         scene::load_with_options(&args.scene, &options)
     })?;
+    if let Some((width, height)) = args.resolution {
+        // The field of view stays the scene's vertical one.
+        description.camera.width = width;
+        description.camera.height = height;
+    }
     report_load(args, &report, &mut times);
     let scene_hash = store::scene_fingerprint(&description);
     let world = times.time("build Embree scene", || World::new(description))?;
@@ -723,8 +751,14 @@ pub fn relative_mse(image: &Image, reference: &Image) -> f64 {
 
 /// What loading repaired or suspects: warnings on stderr, dropped triangles in the table.
 fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseTimes) {
+    let scene = args.scene.display().to_string();
     for warning in &report.warnings {
-        eprintln!("warning: {}: {warning}", args.scene.display());
+        // pbrt warnings already begin with their file:line:column.
+        if warning.starts_with(&scene) {
+            eprintln!("warning: {warning}");
+        } else {
+            eprintln!("warning: {scene}: {warning}");
+        }
     }
     for note in &report.notes {
         eprintln!("note: {note}");

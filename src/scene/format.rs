@@ -11,7 +11,15 @@ use std::fmt;
 use toml::de::DeValue;
 
 const TOP_LEVEL_FIELDS: [&str; 4] = ["camera", "lights", "materials", "objects"];
-const LIGHT_TYPES: [&str; 3] = ["point", "sphere", "quad"];
+const LIGHT_TYPES: [&str; 7] = [
+    "point",
+    "sphere",
+    "quad",
+    "spot",
+    "distant",
+    "environment",
+    "mesh",
+];
 const MATERIAL_TYPES: [&str; 3] = ["diffuse", "mirror", "glass"];
 const OBJECT_TYPES: [&str; 3] = ["sphere", "quad", "mesh"];
 
@@ -51,6 +59,10 @@ pub(crate) enum LightSpec {
     Point(PointLightSpec),
     Sphere(SphereLightSpec),
     Quad(QuadLightSpec),
+    Spot(SpotLightSpec),
+    Distant(DistantLightSpec),
+    Environment(EnvironmentLightSpec),
+    Mesh(MeshLightSpec),
 }
 
 #[derive(Deserialize)]
@@ -77,6 +89,62 @@ pub(crate) struct QuadLightSpec {
     pub power: [f32; 3],
 }
 
+/// pbrt's defaults: `coneangle` 30, `conedelta` 5.
+pub(crate) const DEFAULT_CONE_ANGLE: f32 = 30.0;
+pub(crate) const DEFAULT_CONE_DELTA: f32 = 5.0;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SpotLightSpec {
+    pub position: [f32; 3],
+    /// Where the cone's axis points; any non-zero length.
+    pub direction: [f32; 3],
+    /// Half-angle in degrees where the light ends.
+    #[serde(default = "default_cone_angle")]
+    pub cone_angle: f32,
+    /// Half-angle in degrees where the falloff begins; default `cone_angle` − 5 (at least 0).
+    #[serde(default)]
+    pub falloff_start: Option<f32>,
+    /// `"smoothstep"` (default) or `"quartic"`.
+    #[serde(default)]
+    pub falloff: Option<String>,
+    pub power: [f32; 3],
+}
+
+fn default_cone_angle() -> f32 {
+    DEFAULT_CONE_ANGLE
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct DistantLightSpec {
+    /// The direction the light travels; any non-zero length.
+    pub direction: [f32; 3],
+    pub irradiance: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct EnvironmentLightSpec {
+    pub radiance: [f32; 3],
+}
+
+/// An OBJ emitter, placed as mesh objects are ([`MeshSpec`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MeshLightSpec {
+    pub file: String,
+    #[serde(default)]
+    pub translate: [f32; 3],
+    #[serde(default)]
+    pub rotate: [f32; 3],
+    #[serde(default)]
+    pub scale: Scale,
+    pub power: [f32; 3],
+    #[serde(default)]
+    pub two_sided: bool,
+}
+
 pub(crate) enum MaterialSpec {
     Diffuse(DiffuseSpec),
     Mirror(MirrorSpec),
@@ -89,15 +157,24 @@ pub(crate) struct DiffuseSpec {
     pub albedo: [f32; 3],
 }
 
-/// A mirror has no parameters; the struct exists to reject stray fields.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct MirrorSpec {}
+pub(crate) struct MirrorSpec {
+    /// Default [1, 1, 1].
+    #[serde(default)]
+    pub tint: Option<[f32; 3]>,
+}
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct GlassSpec {
     pub ior: f32,
+    /// Default [1, 1, 1].
+    #[serde(default)]
+    pub reflect_tint: Option<[f32; 3]>,
+    /// Default [1, 1, 1].
+    #[serde(default)]
+    pub transmit_tint: Option<[f32; 3]>,
 }
 
 pub(crate) enum ObjectSpec {
@@ -277,7 +354,11 @@ fn read_light(doc: &Document, path: &str, value: &Value) -> Result<LightSpec, Sc
     Ok(match kind {
         "point" => LightSpec::Point(doc.deserialize(&fields)?),
         "sphere" => LightSpec::Sphere(doc.deserialize(&fields)?),
-        _ => LightSpec::Quad(doc.deserialize(&fields)?),
+        "quad" => LightSpec::Quad(doc.deserialize(&fields)?),
+        "spot" => LightSpec::Spot(doc.deserialize(&fields)?),
+        "distant" => LightSpec::Distant(doc.deserialize(&fields)?),
+        "environment" => LightSpec::Environment(doc.deserialize(&fields)?),
+        _ => LightSpec::Mesh(doc.deserialize(&fields)?),
     })
 }
 

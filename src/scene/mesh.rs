@@ -1,20 +1,18 @@
 //! OBJ meshes and their MTL materials, read through tobj and placed in the world. Owns reading
-//! the files, mapping MTL statements to scene materials (`Kd` → diffuse, `illum` 3/5 → mirror,
-//! `illum` 4/6/7 or `Ni` with `d` < 1 / `Tr` > 0 → glass), splitting faces by material, and
-//! dropping zero-area triangles. Errors inside an OBJ or MTL file name that file and its line;
+//! the files, mapping MTL statements to scene materials (`Kd` → diffuse, `illum` 3/5 → mirror
+//! tinted by `Ks`, `illum` 4/6/7 or `Ni` with `d` < 1 / `Tr` > 0 → glass), splitting faces by
+//! material, gathering a mesh light's faces into one mesh, and dropping zero-area triangles. Errors inside an OBJ or MTL file name that file and its line;
 //! errors about the file as a whole name the scene's `file` field. Must not call Embree.
 
 use super::document::{Document, child_path};
-use super::validate::{MaterialTable, MeshPlacement, is_albedo_channel, is_ior};
+use super::rules::{has_zero_area, is_ior, is_unit_channel};
+use super::validate::{MaterialTable, MeshPlacement};
 use super::{Material, SceneError, TriangleMesh};
 use glam::Vec3;
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
-
-/// A triangle whose edge vectors span less than this sine of an angle has no usable normal.
-const DEGENERATE_SINE: f32 = 1e-6;
 
 pub(crate) struct LoadedMesh {
     /// One mesh per material, in order of first use in the OBJ.
@@ -80,6 +78,31 @@ pub(crate) fn load(
         meshes,
         degenerate_triangles_dropped: dropped,
     })
+}
+
+/// Reads the OBJ of the mesh light at `path` (`lights[2]`): every face, whatever its MTL
+/// material, in one mesh with material 0 and no vertex normals (an emitter is flat-shaded).
+pub(crate) fn load_emitter(
+    doc: &Document,
+    path: &str,
+    scene_folder: &Path,
+    placement: &MeshPlacement,
+) -> Result<(TriangleMesh, usize), SceneError> {
+    let placement = MeshPlacement {
+        file: placement.file.clone(),
+        material_override: Some(0),
+        keep_normals: false,
+        ..*placement
+    };
+    let loaded = load(
+        doc,
+        path,
+        scene_folder,
+        &placement,
+        &mut MaterialTable::default(),
+    )?;
+    let mesh = loaded.meshes.into_iter().next().expect("load gives a mesh");
+    Ok((mesh, loaded.degenerate_triangles_dropped))
 }
 
 /// An OBJ as tobj read it, with the MTL libraries it named.
@@ -209,7 +232,7 @@ impl MeshGroup {
     /// Appends a tobj mesh in world space; returns how many zero-area triangles it left out.
     fn append(&mut self, part: &tobj::Mesh, placement: &MeshPlacement) -> Result<usize, String> {
         let vertex_count = part.positions.len() / 3;
-        let has_normals = !part.normals.is_empty();
+        let has_normals = placement.keep_normals && !part.normals.is_empty();
         if has_normals && part.normals.len() != part.positions.len() {
             return Err("some faces have vertex normals and others do not".into());
         }
@@ -249,19 +272,10 @@ impl MeshGroup {
     }
 }
 
-pub(crate) fn has_zero_area(positions: &[Vec3], [a, b, c]: [u32; 3]) -> bool {
-    let p0 = positions[a as usize];
-    let e1 = positions[b as usize] - p0;
-    let e2 = positions[c as usize] - p0;
-    // Relative test: |e1 × e2| = |e1| |e2| sin(angle).
-    let cross = e1.cross(e2).length();
-    cross.is_nan() || cross <= DEGENERATE_SINE * e1.length() * e2.length()
-}
-
 /// Maps one MTL material; on failure gives the statement keyword to blame and why.
 fn map_mtl(m: &tobj::Material) -> Result<Material, (&'static str, String)> {
     let glass = |ior: Option<f32>, because: &str| match ior {
-        Some(ior) if is_ior(ior) => Ok(Material::Glass { ior }),
+        Some(ior) if is_ior(ior) => Ok(Material::clear_glass(ior)),
         Some(ior) => Err((
             "Ni",
             format!("Ni {ior} must be a finite index of refraction >= 1"),
@@ -269,7 +283,15 @@ fn map_mtl(m: &tobj::Material) -> Result<Material, (&'static str, String)> {
         None => Err(("illum", format!("{because} means glass, which needs Ni"))),
     };
     match m.illumination_model {
-        Some(3 | 5) => return Ok(Material::Mirror),
+        Some(3 | 5) => {
+            let tint = m.specular.unwrap_or([1.0; 3]);
+            if let Some(bad) = tint.iter().find(|&&x| !is_unit_channel(x)) {
+                return Err(("Ks", format!("Ks channel {bad} is not in [0, 1]")));
+            }
+            return Ok(Material::Mirror {
+                tint: Vec3::from_array(tint),
+            });
+        }
         Some(model @ (4 | 6 | 7)) => return glass(m.optical_density, &format!("illum {model}")),
         _ => {}
     }
@@ -290,7 +312,7 @@ fn map_mtl(m: &tobj::Material) -> Result<Material, (&'static str, String)> {
             "has no Kd (diffuse), illum 3/5 (mirror) or illum 4/6/7 with Ni (glass)".into(),
         ));
     };
-    if let Some(bad) = kd.iter().find(|&&x| !is_albedo_channel(x)) {
+    if let Some(bad) = kd.iter().find(|&&x| !is_unit_channel(x)) {
         return Err(("Kd", format!("Kd channel {bad} is not in [0, 1]")));
     }
     Ok(Material::Diffuse {

@@ -7,7 +7,9 @@
 //!
 //! Inside: `document` holds the spanned TOML text and turns byte offsets into lines and field
 //! paths, `format` holds the serde structs of the file format, `validate` checks them and builds
-//! the public types, `mesh` reads OBJ/MTL files, `transform` places meshes in the world.
+//! the public types, `rules` holds the value rules the public types obey (shared by `validate`
+//! and by [`check_light`] and [`check_material`], for descriptions built in code), `mesh` reads
+//! OBJ/MTL files, `transform` places meshes in the world.
 
 mod document;
 pub mod files;
@@ -15,8 +17,11 @@ mod format;
 mod mesh;
 mod pbrt;
 pub mod ply;
+mod rules;
 pub(crate) mod transform;
 mod validate;
+
+pub use rules::{InvalidField, check_light, check_material, check_mesh};
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -55,13 +60,13 @@ pub enum Handedness {
     Left,
 }
 
-/// `power` is the total emitted flux in watts per channel.
+/// A light. `power`, where a light has one, is its total emitted flux in watts per channel
+/// (finite, >= 0, not all zero: [`check_light`] holds every variant's rules).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
-    Point {
-        position: Vec3,
-        power: Vec3,
-    },
+    /// Emits equally in every direction: intensity `power / 4π` W/sr.
+    Point { position: Vec3, power: Vec3 },
+    /// A diffuse emitter over a sphere's surface.
     Sphere {
         center: Vec3,
         radius: f32,
@@ -74,16 +79,115 @@ pub enum Light {
         edge_v: Vec3,
         power: Vec3,
     },
+    /// A point light emitting into a cone (pbrt's "spot"): full intensity within
+    /// `falloff_start_degrees` of `direction`, none beyond `cone_angle_degrees` (both
+    /// half-angles, 0 < cone_angle <= 180 and 0 <= falloff_start <= cone_angle), the transition
+    /// shaped by `falloff`. `direction` is unit. The intensity on the axis is
+    /// `power / falloff.solid_angle(cone_angle_degrees, falloff_start_degrees)`.
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        cone_angle_degrees: f32,
+        falloff_start_degrees: f32,
+        falloff: SpotFalloff,
+        power: Vec3,
+    },
+    /// Parallel light from infinitely far (pbrt's "distant"): `direction` is the unit direction
+    /// the light travels; `irradiance` is W/m² per channel on a surface facing the light.
+    Distant { direction: Vec3, irradiance: Vec3 },
+    /// Constant radiance from every direction (pbrt's "infinite" with a constant L),
+    /// W/(m² sr) per channel. Eye rays that leave the scene see it.
+    Environment { radiance: Vec3 },
+    /// A diffuse emitter over a triangle mesh (pbrt's AreaLightSource "diffuse" on a
+    /// trianglemesh or plymesh): uniform radiance over its area, `power` the total flux. It
+    /// emits on the side its triangles' geometric normals point to (counter-clockwise winding,
+    /// as [`TriangleMesh`] documents), on both sides when `two_sided`; its radiance is
+    /// `power / (π A)` one-sided, `power / (2π A)` two-sided, for the total area `A`. The
+    /// mesh's `material` is unused (set 0) and so are its vertex normals.
+    Mesh {
+        mesh: TriangleMesh,
+        power: Vec3,
+        two_sided: bool,
+    },
 }
 
+/// How a spot light's intensity falls from full at `falloff_start` to none at `cone_angle`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpotFalloff {
+    /// pbrt-v4: smoothstep(cos cone_angle, cos falloff_start, cos θ).
+    Smoothstep,
+    /// pbrt-v3: ((cos θ − cos cone_angle)/(cos falloff_start − cos cone_angle))^4.
+    Quartic,
+}
+
+impl SpotFalloff {
+    /// The intensity at angle θ from the axis relative to the axis's, given the cosines of θ,
+    /// of the cone angle and of the falloff start: 1 inside the falloff start, 0 outside the
+    /// cone (a step there when the two angles are equal).
+    #[inline]
+    pub fn factor(self, cos_theta: f32, cos_cone: f32, cos_start: f32) -> f32 {
+        if cos_theta >= cos_start {
+            return 1.0;
+        }
+        if cos_theta <= cos_cone {
+            return 0.0;
+        }
+        let t = ((cos_theta - cos_cone) / (cos_start - cos_cone)).clamp(0.0, 1.0);
+        match self {
+            SpotFalloff::Smoothstep => t * t * (3.0 - 2.0 * t),
+            SpotFalloff::Quartic => (t * t) * (t * t),
+        }
+    }
+
+    /// ∫ factor dω over the sphere of directions, in steradians: a spot of axis intensity I
+    /// emits Φ = I · this. With α the cone angle and β the falloff start it is
+    /// 2π (1 − (cos α + cos β)/2) for smoothstep and 2π ((1 − cos β) + (cos β − cos α)/5) for
+    /// quartic (the band's mean factor is 1/2 and 1/5).
+    pub fn solid_angle(self, cone_angle_degrees: f32, falloff_start_degrees: f32) -> f32 {
+        let (cos_cone, cos_start) = (
+            cone_angle_degrees.to_radians().cos(),
+            falloff_start_degrees.to_radians().cos(),
+        );
+        2.0 * std::f32::consts::PI * ((1.0 - cos_start) + (cos_start - cos_cone) * self.band_mean())
+    }
+
+    /// The mean factor over the band between the falloff start and the cone, in cos θ.
+    pub(crate) fn band_mean(self) -> f32 {
+        match self {
+            SpotFalloff::Smoothstep => 0.5,
+            SpotFalloff::Quartic => 0.2,
+        }
+    }
+}
+
+/// A material. Every albedo and tint channel lies in [0, 1] ([`check_material`]).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Material {
-    /// Lambertian reflector; every albedo channel lies in [0, 1].
+    /// Lambertian reflector.
     Diffuse { albedo: Vec3 },
-    /// Perfect specular reflector.
-    Mirror,
-    /// Dielectric with index of refraction `ior >= 1` (outside is vacuum).
-    Glass { ior: f32 },
+    /// Perfect specular reflector; `tint` scales what it reflects (pbrt's Kr).
+    Mirror { tint: Vec3 },
+    /// Dielectric with index of refraction `ior >= 1` (outside is vacuum): what it reflects
+    /// is scaled by `reflect_tint` (pbrt's Kr), what it transmits by `transmit_tint` (Kt).
+    Glass {
+        ior: f32,
+        reflect_tint: Vec3,
+        transmit_tint: Vec3,
+    },
+}
+
+impl Material {
+    /// A mirror that reflects everything.
+    pub const MIRROR: Material = Material::Mirror { tint: Vec3::ONE };
+
+    /// Clear glass of index `ior`: untinted reflection and transmission.
+    pub fn clear_glass(ior: f32) -> Material {
+        Material::Glass {
+            ior,
+            reflect_tint: Vec3::ONE,
+            transmit_tint: Vec3::ONE,
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -221,12 +325,20 @@ pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport)
     let scene_folder = source.parent().unwrap_or(Path::new("")).to_path_buf();
 
     let camera = validate::camera(&doc, &spec.camera)?;
-    let lights = spec
-        .lights
-        .iter()
-        .enumerate()
-        .map(|(i, light)| validate::light(&doc, &format!("lights[{i}]"), light))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut report = LoadReport::default();
+    let mut lights = Vec::new();
+    for (i, light) in spec.lights.iter().enumerate() {
+        let path = format!("lights[{i}]");
+        lights.push(match light {
+            format::LightSpec::Mesh(mesh_spec) => {
+                let placement = validate::mesh_placement(&doc, &path, mesh_spec.into(), None)?;
+                let (mesh, dropped) = mesh::load_emitter(&doc, &path, &scene_folder, &placement)?;
+                report.degenerate_triangles_dropped += dropped;
+                validate::mesh_light(&doc, &path, mesh, mesh_spec)?
+            }
+            other => validate::light(&doc, &path, other)?,
+        });
+    }
     let mut materials = validate::MaterialTable::default();
     for (name, material) in &spec.materials {
         let path = document::child_path("materials", name);
@@ -234,7 +346,6 @@ pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport)
         materials.add_named(name, material);
     }
 
-    let mut report = LoadReport::default();
     let mut shapes = Vec::new();
     for (i, object) in spec.objects.iter().enumerate() {
         let path = format!("objects[{i}]");
@@ -246,7 +357,8 @@ pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport)
                 shapes.push(validate::quad(&doc, &path, quad, &materials)?);
             }
             format::ObjectSpec::Mesh(mesh_spec) => {
-                let placement = validate::mesh_placement(&doc, &path, mesh_spec, &materials)?;
+                let placement =
+                    validate::mesh_object_placement(&doc, &path, mesh_spec, &materials)?;
                 let loaded = mesh::load(&doc, &path, &scene_folder, &placement, &mut materials)?;
                 report.degenerate_triangles_dropped += loaded.degenerate_triangles_dropped;
                 shapes.extend(loaded.meshes.into_iter().map(Shape::Triangles));

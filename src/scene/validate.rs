@@ -1,18 +1,26 @@
 //! Value checks on the typed scene file, and construction of the public scene types from it.
-//! Owns the rules on values (finite numbers, positive radii and powers, albedo in [0, 1],
-//! ior >= 1, usable camera and quad geometry, material names that exist) and the numbering of
-//! materials. Each failure names the field path of the offending value. Must not read files
-//! (meshes are `mesh`'s) or know TOML syntax (that is `format` and `document`).
+//! Owns the scene file's own rules (defaults, names of spot falloffs, directions of any
+//! length, material names that exist, usable camera geometry) and the numbering of materials;
+//! the rules the public types obey are `rules`', applied here to what the file gives. Each
+//! failure names the field path of the offending value. Must not read files (meshes are
+//! `mesh`'s) or know TOML syntax (that is `format` and `document`).
 
 use super::document::{Document, child_path};
-use super::format::{CameraSpec, LightSpec, MaterialSpec, MeshSpec, QuadSpec, Scale, SphereSpec};
+use super::format::{
+    CameraSpec, DEFAULT_CONE_DELTA, LightSpec, MaterialSpec, MeshLightSpec, MeshSpec, QuadSpec,
+    Scale, SphereSpec,
+};
+use super::rules::{self, InvalidField, PARALLEL_SINE, check_light, check_material};
 use super::transform::Transform;
-use super::{Camera, Light, Material, SceneError, Shape, TriangleMesh};
+use super::{Camera, Light, Material, SceneError, Shape, SpotFalloff, TriangleMesh};
 use glam::Vec3;
 use std::collections::HashMap;
 
-/// Directions closer than this (sine of the angle between them) count as parallel.
-const PARALLEL_SINE: f32 = 1e-4;
+/// The names of [`SpotFalloff`]s in the scene file.
+const FALLOFFS: [(&str, SpotFalloff); 2] = [
+    ("smoothstep", SpotFalloff::Smoothstep),
+    ("quartic", SpotFalloff::Quartic),
+];
 
 /// Materials in the order they are numbered, with the names objects refer to them by.
 #[derive(Default)]
@@ -58,17 +66,42 @@ impl MaterialTable {
     }
 }
 
-/// How a mesh object is placed and coloured, checked.
+/// How a mesh object or mesh light is placed and coloured, checked.
 pub(crate) struct MeshPlacement {
     pub file: String,
     pub material_override: Option<u32>,
     pub transform: Transform,
+    /// Whether vertex normals are read (an emitter uses its geometric normals only).
+    pub keep_normals: bool,
+}
+
+/// A rule broken by the value at `base`'s `e.field`, located in the scene file. `rename`
+/// turns the public types' field names into the file's where they differ.
+fn located(doc: &Document, base: &str, e: InvalidField, rename: &[(&str, &str)]) -> SceneError {
+    let mut field = e.field;
+    for (public, file) in rename {
+        if let Some(rest) = field.strip_prefix(public) {
+            field = format!("{file}{rest}");
+        }
+    }
+    let path = if base.is_empty() {
+        field
+    } else {
+        format!("{base}.{field}")
+    };
+    doc.error(&path, e.message)
+}
+
+/// The checks of `rules` on the table at `base`, with its errors located.
+fn at<'d, 't>(doc: &'d Document<'t>, base: &'d str) -> impl Fn(InvalidField) -> SceneError + 'd {
+    move |e| located(doc, base, e, &[])
 }
 
 pub(crate) fn camera(doc: &Document, spec: &CameraSpec) -> Result<Camera, SceneError> {
-    let position = finite3(doc, "camera.position", spec.position)?;
-    let look_at = finite3(doc, "camera.look_at", spec.look_at)?;
-    let up = finite3(doc, "camera.up", spec.up)?;
+    let at = at(doc, "camera");
+    let position = rules::finite3("position", Vec3::from_array(spec.position)).map_err(&at)?;
+    let look_at = rules::finite3("look_at", Vec3::from_array(spec.look_at)).map_err(&at)?;
+    let up = rules::finite3("up", Vec3::from_array(spec.up)).map_err(&at)?;
     let view = look_at - position;
     let extent = position.abs().max(look_at.abs()).max_element().max(1.0);
     if view.length() <= 1e-6 * extent {
@@ -112,29 +145,98 @@ pub(crate) fn camera(doc: &Document, spec: &CameraSpec) -> Result<Camera, SceneE
     })
 }
 
+/// A light other than a mesh light (whose OBJ `mesh` reads first: see [`mesh_light`]).
 pub(crate) fn light(doc: &Document, path: &str, spec: &LightSpec) -> Result<Light, SceneError> {
-    let field = |name: &str| child_path(path, name);
-    Ok(match spec {
+    let v = Vec3::from_array;
+    let at = at(doc, path);
+    let light = match spec {
         LightSpec::Point(point) => Light::Point {
-            position: finite3(doc, &field("position"), point.position)?,
-            power: power(doc, &field("power"), point.power)?,
+            position: v(point.position),
+            power: v(point.power),
         },
         LightSpec::Sphere(sphere) => Light::Sphere {
-            center: finite3(doc, &field("center"), sphere.center)?,
-            radius: positive(doc, &field("radius"), sphere.radius)?,
-            power: power(doc, &field("power"), sphere.power)?,
+            center: v(sphere.center),
+            radius: sphere.radius,
+            power: v(sphere.power),
         },
-        LightSpec::Quad(quad) => {
-            let (corner, edge_u, edge_v) =
-                parallelogram(doc, path, quad.corner, quad.edge_u, quad.edge_v)?;
-            Light::Quad {
-                corner,
-                edge_u,
-                edge_v,
-                power: power(doc, &field("power"), quad.power)?,
+        LightSpec::Quad(quad) => Light::Quad {
+            corner: v(quad.corner),
+            edge_u: v(quad.edge_u),
+            edge_v: v(quad.edge_v),
+            power: v(quad.power),
+        },
+        LightSpec::Spot(spot) => {
+            let falloff = match &spot.falloff {
+                None => SpotFalloff::Smoothstep,
+                Some(name) => spot_falloff(doc, &child_path(path, "falloff"), name)?,
+            };
+            Light::Spot {
+                position: v(spot.position),
+                direction: rules::direction("direction", v(spot.direction)).map_err(&at)?,
+                cone_angle_degrees: spot.cone_angle,
+                falloff_start_degrees: spot
+                    .falloff_start
+                    .unwrap_or((spot.cone_angle - DEFAULT_CONE_DELTA).max(0.0)),
+                falloff,
+                power: v(spot.power),
             }
         }
-    })
+        LightSpec::Distant(distant) => Light::Distant {
+            direction: rules::direction("direction", v(distant.direction)).map_err(&at)?,
+            irradiance: v(distant.irradiance),
+        },
+        LightSpec::Environment(environment) => Light::Environment {
+            radiance: v(environment.radiance),
+        },
+        LightSpec::Mesh(_) => unreachable!("mesh lights are built by `mesh_light`"),
+    };
+    checked_light(doc, path, light)
+}
+
+/// A mesh light from its loaded triangles.
+pub(crate) fn mesh_light(
+    doc: &Document,
+    path: &str,
+    mesh: TriangleMesh,
+    spec: &MeshLightSpec,
+) -> Result<Light, SceneError> {
+    let light = Light::Mesh {
+        mesh,
+        power: Vec3::from_array(spec.power),
+        two_sided: spec.two_sided,
+    };
+    checked_light(doc, path, light)
+}
+
+/// `light` if it obeys [`check_light`], else its error on the file's field.
+fn checked_light(doc: &Document, path: &str, light: Light) -> Result<Light, SceneError> {
+    const RENAME: [(&str, &str); 3] = [
+        ("cone_angle_degrees", "cone_angle"),
+        ("falloff_start_degrees", "falloff_start"),
+        // The loader drops what `check_mesh` refuses; anything left is the file's fault.
+        ("mesh", "file"),
+    ];
+    check_light(&light).map_err(|e| {
+        let e = match e.field.starts_with("mesh.") {
+            true => InvalidField::new("mesh", e.to_string()),
+            false => e,
+        };
+        located(doc, path, e, &RENAME)
+    })?;
+    Ok(light)
+}
+
+fn spot_falloff(doc: &Document, path: &str, name: &str) -> Result<SpotFalloff, SceneError> {
+    FALLOFFS
+        .iter()
+        .find(|(known, _)| *known == name)
+        .map(|&(_, falloff)| falloff)
+        .ok_or_else(|| {
+            doc.error(
+                path,
+                format!("unknown falloff `{name}`, expected `smoothstep` or `quartic`"),
+            )
+        })
 }
 
 pub(crate) fn material(
@@ -142,15 +244,22 @@ pub(crate) fn material(
     path: &str,
     spec: &MaterialSpec,
 ) -> Result<Material, SceneError> {
-    Ok(match spec {
+    let rgb_or_one = |rgb: Option<[f32; 3]>| rgb.map_or(Vec3::ONE, Vec3::from_array);
+    let material = match spec {
         MaterialSpec::Diffuse(diffuse) => Material::Diffuse {
-            albedo: albedo(doc, &child_path(path, "albedo"), diffuse.albedo)?,
+            albedo: Vec3::from_array(diffuse.albedo),
         },
-        MaterialSpec::Mirror(_) => Material::Mirror,
+        MaterialSpec::Mirror(mirror) => Material::Mirror {
+            tint: rgb_or_one(mirror.tint),
+        },
         MaterialSpec::Glass(glass) => Material::Glass {
-            ior: ior(doc, &child_path(path, "ior"), glass.ior)?,
+            ior: glass.ior,
+            reflect_tint: rgb_or_one(glass.reflect_tint),
+            transmit_tint: rgb_or_one(glass.transmit_tint),
         },
-    })
+    };
+    check_material(&material).map_err(at(doc, path))?;
+    Ok(material)
 }
 
 pub(crate) fn sphere(
@@ -159,9 +268,10 @@ pub(crate) fn sphere(
     spec: &SphereSpec,
     materials: &MaterialTable,
 ) -> Result<Shape, SceneError> {
+    let at = at(doc, path);
     Ok(Shape::Sphere {
-        center: finite3(doc, &child_path(path, "center"), spec.center)?,
-        radius: positive(doc, &child_path(path, "radius"), spec.radius)?,
+        center: rules::finite3("center", Vec3::from_array(spec.center)).map_err(&at)?,
+        radius: rules::positive("radius", spec.radius).map_err(&at)?,
         material: materials.resolve(doc, &child_path(path, "material"), &spec.material)?,
     })
 }
@@ -173,7 +283,8 @@ pub(crate) fn quad(
     spec: &QuadSpec,
     materials: &MaterialTable,
 ) -> Result<Shape, SceneError> {
-    let (corner, edge_u, edge_v) = parallelogram(doc, path, spec.corner, spec.edge_u, spec.edge_v)?;
+    let [corner, edge_u, edge_v] = [spec.corner, spec.edge_u, spec.edge_v].map(Vec3::from_array);
+    rules::parallelogram(corner, edge_u, edge_v).map_err(at(doc, path))?;
     let material = materials.resolve(doc, &child_path(path, "material"), &spec.material)?;
     Ok(Shape::Triangles(TriangleMesh {
         positions: vec![
@@ -188,129 +299,73 @@ pub(crate) fn quad(
     }))
 }
 
-pub(crate) fn mesh_placement(
+/// Where a mesh object or light takes its triangles from and how it places them.
+pub(crate) struct PlacementSpec<'a> {
+    pub file: &'a str,
+    pub translate: [f32; 3],
+    pub rotate: [f32; 3],
+    pub scale: Scale,
+}
+
+/// The placement of a mesh object, with its `material` override resolved.
+pub(crate) fn mesh_object_placement(
     doc: &Document,
     path: &str,
     spec: &MeshSpec,
     materials: &MaterialTable,
 ) -> Result<MeshPlacement, SceneError> {
-    if spec.file.trim().is_empty() {
-        return Err(doc.error(&child_path(path, "file"), "is empty; give an OBJ file path"));
-    }
     let material_override = match &spec.material {
         Some(name) => Some(materials.resolve(doc, &child_path(path, "material"), name)?),
         None => None,
     };
-    let translate = finite3(doc, &child_path(path, "translate"), spec.translate)?;
-    let rotate = finite3(doc, &child_path(path, "rotate"), spec.rotate)?;
-    let scale_path = child_path(path, "scale");
+    let placement = PlacementSpec {
+        file: &spec.file,
+        translate: spec.translate,
+        rotate: spec.rotate,
+        scale: spec.scale,
+    };
+    mesh_placement(doc, path, placement, material_override)
+}
+
+impl<'a> From<&'a MeshLightSpec> for PlacementSpec<'a> {
+    fn from(spec: &'a MeshLightSpec) -> Self {
+        Self {
+            file: &spec.file,
+            translate: spec.translate,
+            rotate: spec.rotate,
+            scale: spec.scale,
+        }
+    }
+}
+
+/// Checks the file name and transform of the mesh object or light at `path`.
+pub(crate) fn mesh_placement(
+    doc: &Document,
+    path: &str,
+    spec: PlacementSpec,
+    material_override: Option<u32>,
+) -> Result<MeshPlacement, SceneError> {
+    if spec.file.trim().is_empty() {
+        return Err(doc.error(&child_path(path, "file"), "is empty; give an OBJ file path"));
+    }
+    let at = at(doc, path);
+    let translate = rules::finite3("translate", Vec3::from_array(spec.translate)).map_err(&at)?;
+    let rotate = rules::finite3("rotate", Vec3::from_array(spec.rotate)).map_err(&at)?;
     let scale = match spec.scale {
-        Scale::Uniform(factor) => Vec3::splat(positive(doc, &scale_path, factor)?),
+        Scale::Uniform(factor) => Vec3::splat(rules::positive("scale", factor).map_err(&at)?),
         Scale::PerAxis(factors) => {
             for (axis, &factor) in factors.iter().enumerate() {
-                positive(doc, &format!("{scale_path}[{axis}]"), factor)?;
+                rules::positive(&format!("scale[{axis}]"), factor).map_err(&at)?;
             }
             Vec3::from_array(factors)
         }
     };
     Ok(MeshPlacement {
-        file: spec.file.clone(),
+        file: spec.file.to_string(),
         material_override,
         transform: Transform::new(translate, rotate, scale),
+        keep_normals: true,
     })
-}
-
-/// Checks `corner`, `edge_u`, `edge_v` of the table at `path`: finite, non-zero, not parallel.
-fn parallelogram(
-    doc: &Document,
-    path: &str,
-    corner: [f32; 3],
-    edge_u: [f32; 3],
-    edge_v: [f32; 3],
-) -> Result<(Vec3, Vec3, Vec3), SceneError> {
-    let corner = finite3(doc, &child_path(path, "corner"), corner)?;
-    let u_path = child_path(path, "edge_u");
-    let v_path = child_path(path, "edge_v");
-    let edge_u = finite3(doc, &u_path, edge_u)?;
-    let edge_v = finite3(doc, &v_path, edge_v)?;
-    if edge_u.length_squared() == 0.0 {
-        return Err(doc.error(&u_path, "has zero length"));
-    }
-    if edge_v.length_squared() == 0.0 {
-        return Err(doc.error(&v_path, "has zero length"));
-    }
-    if edge_u.normalize().cross(edge_v.normalize()).length() < PARALLEL_SINE {
-        return Err(doc.error(&v_path, "is parallel to edge_u: the quad has no area"));
-    }
-    Ok((corner, edge_u, edge_v))
-}
-
-/// Every component finite; a bad one is reported as `path[i]`.
-fn finite3(doc: &Document, path: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
-    for (i, &x) in v.iter().enumerate() {
-        if !x.is_finite() {
-            return Err(doc.error(
-                &format!("{path}[{i}]"),
-                format!("{x} is not a finite number"),
-            ));
-        }
-    }
-    Ok(Vec3::from_array(v))
-}
-
-fn positive(doc: &Document, path: &str, x: f32) -> Result<f32, SceneError> {
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(doc.error(path, format!("{x} must be a finite number greater than 0")))
-    }
-}
-
-/// Watts per channel: finite, non-negative, not all zero.
-fn power(doc: &Document, path: &str, rgb: [f32; 3]) -> Result<Vec3, SceneError> {
-    for (i, &x) in rgb.iter().enumerate() {
-        if !(x.is_finite() && x >= 0.0) {
-            return Err(doc.error(
-                &format!("{path}[{i}]"),
-                format!("{x} watts must be finite and >= 0"),
-            ));
-        }
-    }
-    let power = Vec3::from_array(rgb);
-    if power == Vec3::ZERO {
-        return Err(doc.error(path, "is zero in every channel: the light emits nothing"));
-    }
-    Ok(power)
-}
-
-/// The albedo rule, shared with MTL `Kd`.
-pub(crate) fn is_albedo_channel(x: f32) -> bool {
-    (0.0..=1.0).contains(&x)
-}
-
-/// The index of refraction rule, shared with MTL `Ni`.
-pub(crate) fn is_ior(x: f32) -> bool {
-    x.is_finite() && x >= 1.0
-}
-
-fn albedo(doc: &Document, path: &str, rgb: [f32; 3]) -> Result<Vec3, SceneError> {
-    for (i, &x) in rgb.iter().enumerate() {
-        if !is_albedo_channel(x) {
-            return Err(doc.error(&format!("{path}[{i}]"), format!("{x} is not in [0, 1]")));
-        }
-    }
-    Ok(Vec3::from_array(rgb))
-}
-
-fn ior(doc: &Document, path: &str, x: f32) -> Result<f32, SceneError> {
-    if is_ior(x) {
-        Ok(x)
-    } else {
-        Err(doc.error(
-            path,
-            format!("{x} must be a finite index of refraction >= 1"),
-        ))
-    }
 }
 
 /// Warnings (not errors) for lights sealed inside a closed opaque object that the camera is
@@ -340,8 +395,9 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
             continue;
         }
         for (l, light) in scene.lights.iter().enumerate() {
+            // Lights at infinity are inside nothing; a mesh light is judged by its middle.
             let at = match light {
-                Light::Point { position, .. } => *position,
+                Light::Point { position, .. } | Light::Spot { position, .. } => *position,
                 Light::Sphere { center, .. } => *center,
                 Light::Quad {
                     corner,
@@ -349,6 +405,12 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
                     edge_v,
                     ..
                 } => *corner + 0.5 * (*edge_u + *edge_v),
+                Light::Mesh { mesh, .. } => {
+                    let lo = mesh.positions.iter().fold(Vec3::MAX, |a, &p| a.min(p));
+                    let hi = mesh.positions.iter().fold(Vec3::MIN, |a, &p| a.max(p));
+                    0.5 * (lo + hi)
+                }
+                Light::Distant { .. } | Light::Environment { .. } => continue,
             };
             if inside(at) {
                 let what = match shape {

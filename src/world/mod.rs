@@ -1,6 +1,7 @@
 //! The world: a scene description turned into one committed Embree scene, plus what light
-//! transport asks of a hit (position, normals, material or emitter) and of the lights
-//! ([`lights`]). Owns the link between Embree geometry ids and scene objects; must not store
+//! transport asks of a hit (position, normals, material or emitter), of the lights
+//! ([`lights`], each prepared once as a [`lights::LightSource`]) and of a ray that leaves the
+//! scene (the environment's radiance). Owns the link between Embree geometry ids and scene objects; must not store
 //! photons, estimate radiance or know about images.
 
 pub mod aim;
@@ -10,6 +11,7 @@ pub mod lights;
 use crate::embree::{self, EmbreeError};
 use crate::scene::{Light, Material, SceneDescription, Shape, TriangleMesh};
 use glam::Vec3;
+use lights::LightSource;
 
 /// How a hit on one Embree geometry finds its normals: everything resolving a hit reads, in
 /// one place per geometry id (not a kind, then the scene's shape or light, then its normals).
@@ -155,6 +157,12 @@ pub struct World {
     pub caustic_targets: Vec<BoundingSphere>,
     /// Diagonal of the scene's bounding box: sets the ray epsilon and the default radii.
     pub scale: f32,
+    /// Around every shape and light with a place: where the lights at infinity send photons from.
+    pub bounds: BoundingSphere,
+    /// The scene's lights prepared for sampling, in [`SceneDescription::lights`]' order.
+    pub light_sources: Vec<LightSource>,
+    /// What a ray that leaves the scene sees: the environments' radiance summed.
+    background: Vec3,
 }
 
 impl World {
@@ -208,16 +216,22 @@ impl World {
                 specular_shapes.push(shape);
             }
         }
+        // Area and mesh lights bound the scene for the lights at infinity, but not its scale:
+        // the scale (ray epsilon, default radii) has always been the shapes' and point lights'.
+        let (mut light_lo, mut light_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         for (i, light) in description.lights.iter().enumerate() {
             match light {
-                Light::Point { position, .. } => {
+                Light::Point { position, .. } | Light::Spot { position, .. } => {
                     lo = lo.min(*position);
                     hi = hi.max(*position);
                     continue;
                 }
+                Light::Distant { .. } | Light::Environment { .. } => continue,
                 Light::Sphere { center, radius, .. } => {
                     builder.add_spheres(&[(*center, *radius)])?;
                     normals.push(sphere_normals(*center, *radius));
+                    light_lo = light_lo.min(*center - *radius);
+                    light_hi = light_hi.max(*center + *radius);
                 }
                 Light::Quad {
                     corner,
@@ -235,6 +249,23 @@ impl World {
                     normals.push(HitNormals::Fixed(
                         edge_u.cross(*edge_v).normalize_or(Vec3::Z),
                     ));
+                    for corner in p {
+                        light_lo = light_lo.min(corner);
+                        light_hi = light_hi.max(corner);
+                    }
+                }
+                Light::Mesh { mesh, .. } => {
+                    builder.add_triangles(&mesh.positions, &mesh.triangles)?;
+                    // An emitter is flat: its side is its triangles' geometric normal.
+                    let flat = TriangleMesh {
+                        normals: None,
+                        ..mesh.clone()
+                    };
+                    normals.push(HitNormals::Triangles(TriangleNormals::new(&flat)));
+                    for p in &mesh.positions {
+                        light_lo = light_lo.min(*p);
+                        light_hi = light_hi.max(*p);
+                    }
                 }
             }
             surfaces.push(Surface::Light(i));
@@ -250,6 +281,26 @@ impl World {
         } else {
             1.0
         };
+        let (all_lo, all_hi) = (lo.min(light_lo), hi.max(light_hi));
+        let bounds = if all_lo.x <= all_hi.x {
+            let mut bounds = BoundingSphere::around_box(all_lo, all_hi);
+            // A lone point still has a little room around it.
+            let extent = bounds.center.abs().max_element().max(1.0);
+            bounds.radius = bounds.radius.max(1e-4 * extent);
+            bounds
+        } else {
+            BoundingSphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+            }
+        };
+        let light_sources: Vec<LightSource> = (description.lights.iter())
+            .map(|light| LightSource::new(light, bounds))
+            .collect();
+        let background = light_sources
+            .iter()
+            .map(LightSource::radiance_at_infinity)
+            .sum();
         Ok(Self {
             description,
             accel,
@@ -257,6 +308,9 @@ impl World {
             normals,
             caustic_targets,
             scale,
+            bounds,
+            light_sources,
+            background,
         })
     }
 
@@ -268,6 +322,11 @@ impl World {
 
     pub fn material(&self, id: u32) -> &Material {
         &self.description.materials[id as usize]
+    }
+
+    /// Radiance arriving along a ray that leaves the scene (the environment's; black without).
+    pub fn background(&self) -> Vec3 {
+        self.background
     }
 
     /// Whether any object is a mirror or glass (so caustic photons exist).

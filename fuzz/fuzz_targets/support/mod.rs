@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use dpm::scene::files::InMemory;
-use dpm::scene::{Light, Material, SceneDescription, SceneError, Shape};
+use dpm::scene::{SceneDescription, SceneError, Shape, check_light, check_material, check_mesh};
 use std::path::{Path, PathBuf};
 
 /// Splits `data` into files: the first is `first`, each later one follows a line `@@@ NAME`.
@@ -44,17 +44,10 @@ pub fn check_scene(scene: &SceneDescription) {
     assert!(c.fov_y_degrees > 0.0 && c.fov_y_degrees < 180.0 && c.width > 0 && c.height > 0);
     assert!(!scene.lights.is_empty() && !scene.shapes.is_empty());
     for light in &scene.lights {
-        let power = match light {
-            Light::Point { power, .. } | Light::Sphere { power, .. } | Light::Quad { power, .. } => *power,
-        };
-        assert!(power.is_finite() && power.min_element() >= 0.0 && power.max_element() > 0.0, "{light:?}");
+        assert!(check_light(light).is_ok(), "{light:?}");
     }
     for m in &scene.materials {
-        match m {
-            Material::Diffuse { albedo } => assert!(albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0),
-            Material::Glass { ior, .. } => assert!(*ior >= 1.0 && ior.is_finite()),
-            _ => {}
-        }
+        assert!(check_material(m).is_ok(), "{m:?}");
     }
     for shape in &scene.shapes {
         match shape {
@@ -65,13 +58,7 @@ pub fn check_scene(scene: &SceneDescription) {
             Shape::Triangles(mesh) => {
                 assert!((mesh.material as usize) < scene.materials.len());
                 assert!(!mesh.triangles.is_empty());
-                assert!(mesh.positions.iter().all(|p| p.is_finite()));
-                let n = mesh.positions.len();
-                assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
-                if let Some(normals) = &mesh.normals {
-                    assert_eq!(normals.len(), n);
-                    assert!(normals.iter().all(|v| v.is_finite() && (v.length() - 1.0).abs() < 1e-3));
-                }
+                assert!(check_mesh(mesh).is_ok());
             }
         }
     }

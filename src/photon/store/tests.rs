@@ -1,5 +1,6 @@
 //! Unit tests of the photon-map file format.
 use super::*;
+use glam::Vec3;
 
 fn photon(i: u32) -> Photon {
     // Repeated coordinates on purpose: ties must not change the rebuilt tree.

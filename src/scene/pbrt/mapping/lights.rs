@@ -4,10 +4,11 @@
 //! the integrals of pbrt's emission: 4π·I for a point, A·π·L for a one-sided emitter. Owns the
 //! conversions; must not place shapes (it asks [`super::shapes`] for an emitter's geometry).
 
+use super::super::Dialect;
 use super::super::parser::{Item, ShapeItem};
 use super::shapes::Geometry;
 use super::{Mapper, param_error, value_error};
-use crate::scene::{Light, SceneError};
+use crate::scene::{Light, SceneError, SpotFalloff, check_light};
 use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 
@@ -43,11 +44,86 @@ impl Mapper<'_> {
                 };
                 Light::Point { position, power }
             }
-            "spot" | "distant" | "infinite" => {
-                return Err(item.at.error(
-                    "LightSource",
-                    format!("light \"{}\" is not supported yet", item.kind),
-                ));
+            "spot" => {
+                let from = point("from", Vec3::ZERO)?;
+                let to = point("to", Vec3::Z)?;
+                let direction = (to - from).normalize_or_zero();
+                if direction == Vec3::ZERO {
+                    return Err(item.at.error(
+                        "LightSource",
+                        "spot: \"from\" and \"to\" are the same point",
+                    ));
+                }
+                let cone = item.params.float("coneangle").map_err(p)?.unwrap_or(30.0);
+                let delta = item.params.float("conedelta").map_err(p)?.unwrap_or(5.0);
+                if !(cone > 0.0 && cone <= 180.0) {
+                    return Err(value_error(
+                        item,
+                        "LightSource",
+                        "coneangle",
+                        format!("coneangle {cone} is not in (0, 180]"),
+                    ));
+                }
+                let start = (cone - delta).clamp(0.0, cone);
+                // pbrt-v3 shapes the edge with (cos θ − cos α)/(cos β − cos α) to the 4th,
+                // pbrt-v4 with a smoothstep.
+                let falloff = match self.dialect.0 {
+                    Dialect::V3 => SpotFalloff::Quartic,
+                    Dialect::V4 => SpotFalloff::Smoothstep,
+                };
+                let intensity = self.emission(item, "I")?;
+                let power = match self.given_power(item)? {
+                    Some(phi) => normalised(intensity) * phi,
+                    None => intensity * falloff.solid_angle(cone, start),
+                };
+                Light::Spot {
+                    position: from,
+                    direction,
+                    cone_angle_degrees: cone,
+                    falloff_start_degrees: start,
+                    falloff,
+                    power,
+                }
+            }
+            "distant" => {
+                let from = point("from", Vec3::ZERO)?;
+                let to = point("to", Vec3::Z)?;
+                let direction = (to - from).normalize_or_zero();
+                if direction == Vec3::ZERO {
+                    return Err(item.at.error(
+                        "LightSource",
+                        "distant: \"from\" and \"to\" are the same point",
+                    ));
+                }
+                let irradiance = match item.params.float("illuminance").map_err(p)? {
+                    Some(e) => normalised(self.emission(item, "L")?) * e,
+                    None => self.emission(item, "L")?,
+                };
+                Light::Distant {
+                    direction,
+                    irradiance,
+                }
+            }
+            "infinite" => {
+                for image in ["mapname", "filename"] {
+                    if item.params.at(image).is_some() {
+                        return Err(value_error(
+                            item,
+                            "LightSource",
+                            image,
+                            "image environment maps are not supported: give a constant \"rgb L\""
+                                .into(),
+                        ));
+                    }
+                }
+                item.params.integer("samples").map_err(p)?;
+                item.params.integer("nsamples").map_err(p)?;
+                // pbrt-v4's illuminance E sets the radiance so that an upward surface gets E.
+                let radiance = match item.params.float("illuminance").map_err(p)? {
+                    Some(e) => normalised(self.emission(item, "L")?) * (e / PI),
+                    None => self.emission(item, "L")?,
+                };
+                Light::Environment { radiance }
             }
             "goniometric" | "projection" => {
                 return Err(item.at.error(
@@ -115,7 +191,9 @@ impl Mapper<'_> {
                     power,
                 }
             }
-            Geometry::Triangles(mesh) => {
+            Geometry::Triangles(mut mesh) => {
+                // An emitter is flat-shaded, as a TOML mesh light.
+                mesh.normals = None;
                 let area_m2: f32 = mesh
                     .triangles
                     .iter()
@@ -131,12 +209,11 @@ impl Mapper<'_> {
                         edge_v,
                         power: flux(area_m2),
                     },
-                    _ => {
-                        return Err(shape.item.at.error(
-                            "AreaLightSource",
-                            "an area light on a mesh other than one quad is not supported yet",
-                        ));
-                    }
+                    _ => Light::Mesh {
+                        mesh,
+                        power: flux(area_m2),
+                        two_sided,
+                    },
                 }
             }
         };
@@ -144,17 +221,10 @@ impl Mapper<'_> {
     }
 
     fn checked(&self, item: &Item, directive: &str, light: Light) -> Result<Light, SceneError> {
-        let power = match &light {
-            Light::Point { power, .. }
-            | Light::Sphere { power, .. }
-            | Light::Quad { power, .. } => *power,
-        };
-        if !(power.is_finite() && power.min_element() >= 0.0 && power.max_element() > 0.0) {
-            return Err(item.at.error(
-                directive,
-                format!("light \"{}\" emits {power}: each channel must be finite and >= 0, and not all 0", item.kind),
-            ));
-        }
+        check_light(&light).map_err(|why| {
+            item.at
+                .error(directive, format!("light \"{}\": {why}", item.kind))
+        })?;
         Ok(light)
     }
 }

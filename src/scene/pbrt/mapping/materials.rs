@@ -89,7 +89,7 @@ impl Mapper<'_> {
             }),
             "mirror" => {
                 let tint = colour("Kr", 0.9)?;
-                exact(self.mirror(tint))
+                exact(Material::Mirror { tint })
             }
             "glass" => {
                 let ior = params.float("index").map_err(p)?;
@@ -99,7 +99,11 @@ impl Mapper<'_> {
                 };
                 let rough = roughness(&["uroughness", "vroughness"])?;
                 params.bool("remaproughness").map_err(p)?;
-                let material = self.glass(ior, colour("Kr", 1.0)?, colour("Kt", 1.0)?);
+                let material = Material::Glass {
+                    ior,
+                    reflect_tint: colour("Kr", 1.0)?,
+                    transmit_tint: colour("Kt", 1.0)?,
+                };
                 Mapped {
                     material,
                     approximation: (rough > 0.0)
@@ -133,7 +137,7 @@ impl Mapper<'_> {
                     why = Some("thindielectric is rendered as a solid dielectric".into());
                 }
                 Mapped {
-                    material: self.glass(ior, Vec3::ONE, Vec3::ONE),
+                    material: Material::clear_glass(ior),
                     approximation: why,
                 }
             }
@@ -153,7 +157,7 @@ impl Mapper<'_> {
                 };
                 params.bool("remaproughness").map_err(p)?;
                 if rough == 0.0 {
-                    exact(self.mirror(reflectance))
+                    exact(Material::Mirror { tint: reflectance })
                 } else {
                     Mapped {
                         material: Material::Diffuse {
@@ -240,17 +244,6 @@ impl Mapper<'_> {
                 ((eta - one) * (eta - one) + k * k) / ((eta + one) * (eta + one) + k * k)
             }
         })
-    }
-}
-
-impl Mapper<'_> {
-    /// dpm's mirror for pbrt's reflectance `tint`.
-    fn mirror(&self, _tint: Vec3) -> Material {
-        Material::Mirror
-    }
-
-    fn glass(&self, ior: f32, _reflect: Vec3, _transmit: Vec3) -> Material {
-        Material::Glass { ior }
     }
 }
 

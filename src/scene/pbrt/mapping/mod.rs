@@ -282,7 +282,7 @@ impl Mapper<'_> {
                     let at = item.at.clone();
                     self.warn(&at, format!("{label}: dpm ignores {}", unused.join(", ")));
                 }
-                check_material(&mapped.material)
+                crate::scene::check_material(&mapped.material)
                     .map_err(|why| item.at.error("Material", format!("{label}: {why}")))?;
                 mapped.material
             }
@@ -319,26 +319,5 @@ pub(super) fn value_error(item: &Item, directive: &str, name: &str, message: Str
     match item.params.error_at(name, message.clone()) {
         Some(e) => param_error(&item.at, directive, e),
         None => item.at.error(directive, message),
-    }
-}
-
-/// The checks the TOML format makes of a material.
-fn check_material(m: &Material) -> Result<(), String> {
-    match m {
-        Material::Diffuse { albedo }
-            if !albedo
-                .to_array()
-                .into_iter()
-                .all(validate::is_albedo_channel) =>
-        {
-            Err(format!(
-                "reflectance {} has a channel outside [0, 1]",
-                materials::rgb_text(*albedo)
-            ))
-        }
-        Material::Glass { ior } if !validate::is_ior(*ior) => {
-            Err(format!("index of refraction {ior} is below 1"))
-        }
-        _ => Ok(()),
     }
 }

@@ -6,7 +6,7 @@
 
 use super::super::parser::{Item, ShapeItem};
 use super::{Mapper, param_error, require, value_error};
-use crate::scene::{SceneError, Shape, TriangleMesh, mesh, ply};
+use crate::scene::{SceneError, Shape, TriangleMesh, ply, rules};
 use glam::{Mat3, Vec3};
 
 /// A bilinear patch whose fourth corner is further than this (relative to its size) from
@@ -213,7 +213,7 @@ impl Mapper<'_> {
         let flip_all = shape.reverse_orientation ^ swaps_handedness;
         let mut kept = Vec::with_capacity(triangles.len());
         for [a, b, c] in triangles {
-            if mesh::has_zero_area(&world, [a, b, c]) {
+            if rules::has_zero_area(&world, [a, b, c]) {
                 self.report.degenerate_triangles_dropped += 1;
                 continue;
             }

@@ -1,0 +1,181 @@
+//! The FNV-1a hash of photon map files and films, and the scene fingerprint built on it: every
+//! number photon tracing reads from a scene (lights, materials, shapes), bit for bit, so a map
+//! or film of another scene is refused. Owns the hash and what the fingerprint covers; knows
+//! nothing of the file formats that use them.
+
+use crate::scene::{Light, Material, SceneDescription, Shape, SpotFalloff, TriangleMesh};
+use glam::Vec3;
+
+/// FNV-1a, 64 bit: the file checksum and the scene fingerprint.
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv64(u64);
+
+impl Default for Fnv64 {
+    fn default() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv64 {
+    pub fn update(&mut self, bytes: &[u8]) {
+        let mut h = self.0;
+        for &b in bytes {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        self.0 = h;
+    }
+    pub fn finish(&self) -> u64 {
+        self.0
+    }
+    fn u32(&mut self, x: u32) {
+        self.update(&x.to_le_bytes());
+    }
+    fn u64(&mut self, x: u64) {
+        self.update(&x.to_le_bytes());
+    }
+    fn f32(&mut self, x: f32) {
+        self.u32(x.to_bits());
+    }
+    fn vec3(&mut self, v: Vec3) {
+        v.to_array().into_iter().for_each(|x| self.f32(x));
+    }
+    fn mesh(&mut self, mesh: &TriangleMesh) {
+        self.u32(mesh.material);
+        self.u64(mesh.positions.len() as u64);
+        mesh.positions.iter().for_each(|&p| self.vec3(p));
+        match &mesh.normals {
+            Some(normals) => {
+                self.u32(1);
+                normals.iter().for_each(|&n| self.vec3(n));
+            }
+            None => self.u32(0),
+        }
+        self.u64(mesh.triangles.len() as u64);
+        mesh.triangles.iter().flatten().for_each(|&i| self.u32(i));
+    }
+}
+
+/// A fingerprint of everything photon tracing reads from a scene: lights, materials and
+/// shapes after loading (mesh files included, since their triangles are), bit for bit. The
+/// camera is left out: a map stays valid for another view or resolution of the same scene.
+pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
+    let mut h = Fnv64::default();
+    h.update(b"dpm photon scene v1");
+    h.u64(scene.lights.len() as u64);
+    for light in &scene.lights {
+        match light {
+            Light::Point { position, power } => {
+                h.u32(0);
+                h.vec3(*position);
+                h.vec3(*power);
+            }
+            Light::Sphere {
+                center,
+                radius,
+                power,
+            } => {
+                h.u32(1);
+                h.vec3(*center);
+                h.f32(*radius);
+                h.vec3(*power);
+            }
+            Light::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                power,
+            } => {
+                h.u32(2);
+                h.vec3(*corner);
+                h.vec3(*edge_u);
+                h.vec3(*edge_v);
+                h.vec3(*power);
+            }
+            Light::Spot {
+                position,
+                direction,
+                cone_angle_degrees,
+                falloff_start_degrees,
+                falloff,
+                power,
+            } => {
+                h.u32(3);
+                h.vec3(*position);
+                h.vec3(*direction);
+                h.f32(*cone_angle_degrees);
+                h.f32(*falloff_start_degrees);
+                h.u32(match falloff {
+                    SpotFalloff::Smoothstep => 0,
+                    SpotFalloff::Quartic => 1,
+                });
+                h.vec3(*power);
+            }
+            Light::Distant {
+                direction,
+                irradiance,
+            } => {
+                h.u32(4);
+                h.vec3(*direction);
+                h.vec3(*irradiance);
+            }
+            Light::Environment { radiance } => {
+                h.u32(5);
+                h.vec3(*radiance);
+            }
+            Light::Mesh {
+                mesh,
+                power,
+                two_sided,
+            } => {
+                h.u32(6);
+                h.mesh(mesh);
+                h.vec3(*power);
+                h.u32(u32::from(*two_sided));
+            }
+        }
+    }
+    h.u64(scene.materials.len() as u64);
+    for material in &scene.materials {
+        match material {
+            Material::Diffuse { albedo } => {
+                h.u32(0);
+                h.vec3(*albedo);
+            }
+            Material::Mirror { tint } => {
+                h.u32(1);
+                h.vec3(*tint);
+            }
+            Material::Glass {
+                ior,
+                reflect_tint,
+                transmit_tint,
+            } => {
+                h.u32(2);
+                h.f32(*ior);
+                h.vec3(*reflect_tint);
+                h.vec3(*transmit_tint);
+            }
+        }
+    }
+    h.u64(scene.shapes.len() as u64);
+    for shape in &scene.shapes {
+        match shape {
+            Shape::Sphere {
+                center,
+                radius,
+                material,
+            } => {
+                h.u32(0);
+                h.vec3(*center);
+                h.f32(*radius);
+                h.u32(*material);
+            }
+            Shape::Triangles(mesh) => {
+                h.u32(1);
+                h.mesh(mesh);
+            }
+        }
+    }
+    h.finish()
+}

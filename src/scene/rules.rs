@@ -1,0 +1,392 @@
+//! The rules on values that the public scene types obey (finite numbers, positive radii, light
+//! powers finite, >= 0 and not all zero, albedo and tints in [0, 1], ior >= 1, unit directions,
+//! spot cone angles, parallelograms with area, meshes with valid indices and no zero-area
+//! triangles), each failure an [`InvalidField`] naming the offending field relative to the
+//! value checked. The one place these rules live: `validate` applies them to the scene file
+//! (and adds the file's line), and [`check_light`], [`check_material`] and [`check_mesh`] apply
+//! them to descriptions built in code (another scene format's reader). Must not know TOML,
+//! read files or report lines.
+
+use super::{Light, Material, TriangleMesh};
+use glam::Vec3;
+
+/// Directions closer than this (sine of the angle between them) count as parallel.
+pub(crate) const PARALLEL_SINE: f32 = 1e-4;
+
+/// A triangle whose edge vectors span less than this sine of an angle has no usable normal.
+pub(crate) const DEGENERATE_SINE: f32 = 1e-6;
+
+/// How far from 1 the length of a direction that must be unit may be.
+const UNIT_TOLERANCE: f32 = 1e-3;
+
+/// A value that breaks a rule: the field, relative to the light, material or mesh checked
+/// (`power[1]`, `cone_angle_degrees`, `mesh.triangles[4]`), and why. Displays as
+/// `field: message`; `String::from` gives that text.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct InvalidField {
+    pub field: String,
+    pub message: String,
+}
+
+impl From<InvalidField> for String {
+    fn from(e: InvalidField) -> String {
+        e.to_string()
+    }
+}
+
+impl InvalidField {
+    pub(crate) fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The same problem, its field named inside `parent` (`mesh` + `positions[3]`).
+    fn within(self, parent: &str) -> Self {
+        Self {
+            field: format!("{parent}.{}", self.field),
+            ..self
+        }
+    }
+}
+
+type Checked<T> = Result<T, InvalidField>;
+
+/// Checks a light against the rules the scene file's lights obey; the error names the field
+/// as the [`Light`] variant spells it (`direction`, `falloff_start_degrees`, `mesh.positions[2]`).
+pub fn check_light(light: &Light) -> Result<(), InvalidField> {
+    match light {
+        Light::Point { position, power } => {
+            finite3("position", *position)?;
+            flux("power", *power, WATTS)?;
+        }
+        Light::Sphere {
+            center,
+            radius,
+            power,
+        } => {
+            finite3("center", *center)?;
+            positive("radius", *radius)?;
+            flux("power", *power, WATTS)?;
+        }
+        Light::Quad {
+            corner,
+            edge_u,
+            edge_v,
+            power,
+        } => {
+            parallelogram(*corner, *edge_u, *edge_v)?;
+            flux("power", *power, WATTS)?;
+        }
+        Light::Spot {
+            position,
+            direction,
+            cone_angle_degrees,
+            falloff_start_degrees,
+            falloff: _,
+            power,
+        } => {
+            finite3("position", *position)?;
+            unit_direction("direction", *direction)?;
+            spot_cone(*cone_angle_degrees, *falloff_start_degrees)?;
+            flux("power", *power, WATTS)?;
+        }
+        Light::Distant {
+            direction,
+            irradiance,
+        } => {
+            unit_direction("direction", *direction)?;
+            flux("irradiance", *irradiance, "W/m²")?;
+        }
+        Light::Environment { radiance } => {
+            flux("radiance", *radiance, "W/(m² sr)")?;
+        }
+        Light::Mesh { mesh, power, .. } => {
+            check_mesh(mesh).map_err(|e| e.within("mesh"))?;
+            flux("power", *power, WATTS)?;
+        }
+    }
+    Ok(())
+}
+
+/// Checks a material: albedo and tints in [0, 1] per channel, ior finite and >= 1.
+pub fn check_material(material: &Material) -> Result<(), InvalidField> {
+    match material {
+        Material::Diffuse { albedo } => unit_rgb("albedo", *albedo).map(drop),
+        Material::Mirror { tint } => unit_rgb("tint", *tint).map(drop),
+        Material::Glass {
+            ior: index,
+            reflect_tint,
+            transmit_tint,
+        } => {
+            ior("ior", *index)?;
+            unit_rgb("reflect_tint", *reflect_tint)?;
+            unit_rgb("transmit_tint", *transmit_tint).map(drop)
+        }
+    }
+}
+
+/// Checks a triangle mesh: at least one triangle, finite positions, indices in range, no
+/// zero-area triangle, and vertex normals (when given) one per position, finite and non-zero.
+pub fn check_mesh(mesh: &TriangleMesh) -> Result<(), InvalidField> {
+    if mesh.triangles.is_empty() {
+        return Err(InvalidField::new("triangles", "is empty: no surface"));
+    }
+    for (i, p) in mesh.positions.iter().enumerate() {
+        finite3(&format!("positions[{i}]"), *p)?;
+    }
+    let count = mesh.positions.len();
+    for (i, triangle) in mesh.triangles.iter().enumerate() {
+        let field = format!("triangles[{i}]");
+        if let Some(bad) = triangle.iter().find(|&&v| v as usize >= count) {
+            return Err(InvalidField::new(
+                field,
+                format!("index {bad} is out of range ({count} positions)"),
+            ));
+        }
+        if has_zero_area(&mesh.positions, *triangle) {
+            return Err(InvalidField::new(field, "has zero area"));
+        }
+    }
+    if let Some(normals) = &mesh.normals {
+        if normals.len() != count {
+            return Err(InvalidField::new(
+                "normals",
+                format!("{} normals for {count} positions", normals.len()),
+            ));
+        }
+        for (i, n) in normals.iter().enumerate() {
+            let field = format!("normals[{i}]");
+            finite3(&field, *n)?;
+            if n.length_squared() == 0.0 {
+                return Err(InvalidField::new(field, "has zero length"));
+            }
+        }
+    }
+    Ok(())
+}
+
+pub(crate) const WATTS: &str = "watts";
+
+/// Every component finite; a bad one is reported as `field[i]`.
+pub(crate) fn finite3(field: &str, v: Vec3) -> Checked<Vec3> {
+    for (i, x) in v.to_array().into_iter().enumerate() {
+        if !x.is_finite() {
+            return Err(InvalidField::new(
+                format!("{field}[{i}]"),
+                format!("{x} is not a finite number"),
+            ));
+        }
+    }
+    Ok(v)
+}
+
+pub(crate) fn positive(field: &str, x: f32) -> Checked<f32> {
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(InvalidField::new(
+            field,
+            format!("{x} must be a finite number greater than 0"),
+        ))
+    }
+}
+
+/// A light's flux, irradiance or radiance in `unit` per channel: finite, >= 0, not all zero.
+pub(crate) fn flux(field: &str, rgb: Vec3, unit: &str) -> Checked<Vec3> {
+    for (i, x) in rgb.to_array().into_iter().enumerate() {
+        if !(x.is_finite() && x >= 0.0) {
+            return Err(InvalidField::new(
+                format!("{field}[{i}]"),
+                format!("{x} {unit} must be finite and >= 0"),
+            ));
+        }
+    }
+    if rgb == Vec3::ZERO {
+        return Err(InvalidField::new(
+            field,
+            "is zero in every channel: the light emits nothing",
+        ));
+    }
+    Ok(rgb)
+}
+
+/// The albedo and tint rule, shared with MTL `Kd` and `Ks`.
+pub(crate) fn is_unit_channel(x: f32) -> bool {
+    (0.0..=1.0).contains(&x)
+}
+
+/// The index of refraction rule, shared with MTL `Ni`.
+pub(crate) fn is_ior(x: f32) -> bool {
+    x.is_finite() && x >= 1.0
+}
+
+/// Every channel in [0, 1] (an albedo or a tint).
+pub(crate) fn unit_rgb(field: &str, rgb: Vec3) -> Checked<Vec3> {
+    for (i, x) in rgb.to_array().into_iter().enumerate() {
+        if !is_unit_channel(x) {
+            return Err(InvalidField::new(
+                format!("{field}[{i}]"),
+                format!("{x} is not in [0, 1]"),
+            ));
+        }
+    }
+    Ok(rgb)
+}
+
+pub(crate) fn ior(field: &str, x: f32) -> Checked<f32> {
+    if is_ior(x) {
+        Ok(x)
+    } else {
+        Err(InvalidField::new(
+            field,
+            format!("{x} must be a finite index of refraction >= 1"),
+        ))
+    }
+}
+
+/// A finite, non-zero vector, brought to unit length (a direction as the scene file gives it).
+pub(crate) fn direction(field: &str, v: Vec3) -> Checked<Vec3> {
+    finite3(field, v)?;
+    let length = v.length();
+    if !(length > 0.0 && length.is_finite()) {
+        return Err(InvalidField::new(field, "has zero length: no direction"));
+    }
+    Ok(v / length)
+}
+
+/// A direction that must already be unit.
+fn unit_direction(field: &str, v: Vec3) -> Checked<Vec3> {
+    direction(field, v)?;
+    let length = v.length();
+    if (length - 1.0).abs() > UNIT_TOLERANCE {
+        return Err(InvalidField::new(
+            field,
+            format!("has length {length}, not 1: give a unit vector"),
+        ));
+    }
+    Ok(v)
+}
+
+/// A spot light's half-angles: the cone in (0, 180] degrees, the falloff start in [0, cone].
+pub(crate) fn spot_cone(cone_angle: f32, falloff_start: f32) -> Checked<()> {
+    if !(cone_angle.is_finite() && cone_angle > 0.0 && cone_angle <= 180.0) {
+        return Err(InvalidField::new(
+            "cone_angle_degrees",
+            format!("{cone_angle} is not in (0, 180] degrees"),
+        ));
+    }
+    if !(falloff_start.is_finite() && (0.0..=cone_angle).contains(&falloff_start)) {
+        return Err(InvalidField::new(
+            "falloff_start_degrees",
+            format!("{falloff_start} is not in [0, {cone_angle}] degrees (0 up to the cone angle)"),
+        ));
+    }
+    Ok(())
+}
+
+/// `corner`, `edge_u`, `edge_v`: finite, edges non-zero and not parallel.
+pub(crate) fn parallelogram(corner: Vec3, edge_u: Vec3, edge_v: Vec3) -> Checked<()> {
+    finite3("corner", corner)?;
+    finite3("edge_u", edge_u)?;
+    finite3("edge_v", edge_v)?;
+    if edge_u.length_squared() == 0.0 {
+        return Err(InvalidField::new("edge_u", "has zero length"));
+    }
+    if edge_v.length_squared() == 0.0 {
+        return Err(InvalidField::new("edge_v", "has zero length"));
+    }
+    if edge_u.normalize().cross(edge_v.normalize()).length() < PARALLEL_SINE {
+        return Err(InvalidField::new(
+            "edge_v",
+            "is parallel to edge_u: the quad has no area",
+        ));
+    }
+    Ok(())
+}
+
+/// Whether a triangle's corners are repeated or collinear (relative to its edges' lengths).
+pub(crate) fn has_zero_area(positions: &[Vec3], [a, b, c]: [u32; 3]) -> bool {
+    let p0 = positions[a as usize];
+    let e1 = positions[b as usize] - p0;
+    let e2 = positions[c as usize] - p0;
+    // Relative test: |e1 × e2| = |e1| |e2| sin(angle).
+    let cross = e1.cross(e2).length();
+    cross.is_nan() || cross <= DEGENERATE_SINE * e1.length() * e2.length()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SpotFalloff;
+
+    fn spot(cone: f32, start: f32) -> Light {
+        Light::Spot {
+            position: Vec3::ZERO,
+            direction: -Vec3::Y,
+            cone_angle_degrees: cone,
+            falloff_start_degrees: start,
+            falloff: SpotFalloff::Quartic,
+            power: Vec3::ONE,
+        }
+    }
+
+    fn field_of(light: &Light) -> String {
+        check_light(light).unwrap_err().field
+    }
+
+    #[test]
+    fn lights_built_in_code_are_checked_field_by_field() {
+        assert_eq!(check_light(&spot(30.0, 25.0)), Ok(()));
+        assert_eq!(check_light(&spot(180.0, 0.0)), Ok(()));
+        assert_eq!(field_of(&spot(0.0, 0.0)), "cone_angle_degrees");
+        assert_eq!(field_of(&spot(190.0, 0.0)), "cone_angle_degrees");
+        assert_eq!(field_of(&spot(f32::NAN, 0.0)), "cone_angle_degrees");
+        assert_eq!(field_of(&spot(30.0, 31.0)), "falloff_start_degrees");
+        assert_eq!(field_of(&spot(30.0, -1.0)), "falloff_start_degrees");
+        let not_unit = Light::Distant {
+            direction: Vec3::new(0.0, -2.0, 0.0),
+            irradiance: Vec3::ONE,
+        };
+        let e = check_light(&not_unit).unwrap_err();
+        assert_eq!(e.field, "direction");
+        assert!(e.message.contains("unit"), "{e}");
+        let dark = Light::Environment {
+            radiance: Vec3::new(0.0, -1.0, 0.0),
+        };
+        assert_eq!(field_of(&dark), "radiance[1]");
+        let flat = Light::Mesh {
+            mesh: TriangleMesh {
+                positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+                triangles: vec![[0, 1, 2]],
+                ..Default::default()
+            },
+            power: Vec3::ONE,
+            two_sided: false,
+        };
+        assert_eq!(field_of(&flat), "mesh.triangles[0]");
+        let e: String = check_light(&flat).unwrap_err().into();
+        assert_eq!(e, "mesh.triangles[0]: has zero area");
+    }
+
+    #[test]
+    fn tints_above_one_are_refused() {
+        let mirror = Material::Mirror {
+            tint: Vec3::new(0.5, 1.5, 1.0),
+        };
+        assert_eq!(check_material(&mirror).unwrap_err().field, "tint[1]");
+        let glass = Material::Glass {
+            ior: 1.5,
+            reflect_tint: Vec3::ONE,
+            transmit_tint: Vec3::new(1.0, 1.0, f32::NAN),
+        };
+        assert_eq!(
+            check_material(&glass).unwrap_err().field,
+            "transmit_tint[2]"
+        );
+        assert_eq!(check_material(&Material::clear_glass(1.5)), Ok(()));
+        assert_eq!(check_material(&Material::MIRROR), Ok(()));
+    }
+}

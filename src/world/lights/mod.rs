@@ -1,0 +1,282 @@
+//! Lights as light transport sees them: emitting photons (optionally aimed at bounding spheres,
+//! for caustic photons), sampling incident light at a surface point for direct lighting, the
+//! radiance of a visible emitter, and the radiance of the sky an escaping ray sees. Owns the
+//! sampling densities; must not trace rays.
+//!
+//! Inside: `point` holds point and spot lights, `area` the sphere, quad and mesh emitters,
+//! `infinite` the distant light and the environment, whose photons start on discs outside the
+//! scene's bounding sphere. A [`LightSource`] is one scene light prepared once per world; a
+//! [`LightEmitter`] is one light's photons prepared once per map (aimed or not).
+
+mod area;
+mod infinite;
+mod point;
+#[cfg(test)]
+mod tests;
+
+use super::BoundingSphere;
+use crate::sampling::Rng;
+use crate::scene::Light;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// One emitted photon before the caller divides by the number emitted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emission {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    /// Flux carried when this is the only photon emitted from the light.
+    pub flux: Vec3,
+}
+
+/// A sample of incident light for direct lighting at a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IncidentSample {
+    /// Unit direction towards the light.
+    pub direction: Vec3,
+    /// How far a shadow ray towards the light must be clear: the sampled light point, less a
+    /// margin that keeps the light's own surface out of the test; infinite for lights at
+    /// infinity.
+    pub distance: f32,
+    /// Irradiance contribution on a surface facing `direction` (already divided by the pdf),
+    /// before the receiver's cosine: multiply by `max(0, n·direction)`.
+    pub irradiance: Vec3,
+}
+
+/// Luminance-like weight used to split photons among lights.
+pub fn weight(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722)).max(0.0)
+}
+
+/// A scene light with what every sample of it shares worked out once: a spot's intensity, a
+/// mesh's table of triangle areas, the scene's bounding sphere for the lights at infinity.
+#[derive(Clone, Debug)]
+pub struct LightSource(Kind);
+
+#[derive(Clone, Debug)]
+enum Kind {
+    Point {
+        position: Vec3,
+        power: Vec3,
+    },
+    Spot(point::Spot),
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        power: Vec3,
+    },
+    Quad {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        power: Vec3,
+    },
+    /// Shared with the emitters built from it: a big mesh's table is not copied per map.
+    Mesh(Arc<area::MeshLight>),
+    Distant(infinite::Distant),
+    Environment(infinite::Environment),
+}
+
+impl LightSource {
+    /// `light` in a scene whose geometry lies within `scene`.
+    pub fn new(light: &Light, scene: BoundingSphere) -> Self {
+        Self(match *light {
+            Light::Point { position, power } => Kind::Point { position, power },
+            Light::Sphere {
+                center,
+                radius,
+                power,
+            } => Kind::Sphere {
+                center,
+                radius,
+                power,
+            },
+            Light::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                power,
+            } => Kind::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                power,
+            },
+            Light::Spot {
+                position,
+                direction,
+                cone_angle_degrees,
+                falloff_start_degrees,
+                falloff,
+                power,
+            } => Kind::Spot(point::Spot::new(
+                position,
+                direction,
+                cone_angle_degrees,
+                falloff_start_degrees,
+                falloff,
+                power,
+            )),
+            Light::Distant {
+                direction,
+                irradiance,
+            } => Kind::Distant(infinite::Distant::new(direction, irradiance, scene)),
+            Light::Environment { radiance } => {
+                Kind::Environment(infinite::Environment::new(radiance, scene))
+            }
+            Light::Mesh {
+                ref mesh,
+                power,
+                two_sided,
+            } => Kind::Mesh(Arc::new(area::MeshLight::new(mesh, power, two_sided))),
+        })
+    }
+
+    /// Total flux in watts per channel: for the lights at infinity, what crosses the scene's
+    /// bounding sphere (E·πR² for a distant light, L·4π·πR² for the environment).
+    pub fn power(&self) -> Vec3 {
+        match &self.0 {
+            Kind::Point { power, .. } | Kind::Sphere { power, .. } | Kind::Quad { power, .. } => {
+                *power
+            }
+            Kind::Spot(spot) => spot.power(),
+            Kind::Mesh(mesh) => mesh.power(),
+            Kind::Distant(distant) => distant.power(),
+            Kind::Environment(environment) => environment.power(),
+        }
+    }
+
+    /// Whether light arrives from it along one direction only (a point, a spot, a distant
+    /// light), so that one shadow ray says all there is.
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self.0,
+            Kind::Point { .. } | Kind::Spot(_) | Kind::Distant(_)
+        )
+    }
+
+    /// Radiance leaving a visible area light towards a viewer at `cos_out` from its surface's
+    /// normal (zero for lights with no surface).
+    pub fn emitted_radiance(&self, cos_out: f32) -> Vec3 {
+        match &self.0 {
+            Kind::Sphere { radius, power, .. } => area::sphere_radiance(*radius, *power),
+            Kind::Quad {
+                edge_u,
+                edge_v,
+                power,
+                ..
+            } => {
+                if cos_out <= 0.0 {
+                    return Vec3::ZERO;
+                }
+                *power / (std::f32::consts::PI * area::quad_area_normal(*edge_u, *edge_v).0)
+            }
+            Kind::Mesh(mesh) => mesh.emitted_radiance(cos_out),
+            Kind::Point { .. } | Kind::Spot(_) | Kind::Distant(_) | Kind::Environment(_) => {
+                Vec3::ZERO
+            }
+        }
+    }
+
+    /// Radiance a ray that leaves the scene sees from this light (the environment's).
+    pub fn radiance_at_infinity(&self) -> Vec3 {
+        match &self.0 {
+            Kind::Environment(environment) => environment.radiance(),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Samples light arriving at `x`, a surface point with unit normal `n`, from this light
+    /// (one sample, from the pair `u`). `None` when no light can arrive that way.
+    pub fn sample_incident(&self, x: Vec3, n: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
+        match &self.0 {
+            Kind::Point { position, power } => point::point_incident(*position, *power, x),
+            Kind::Spot(spot) => spot.incident(x),
+            Kind::Sphere {
+                center,
+                radius,
+                power,
+            } => area::sphere_incident(*center, *radius, *power, x, u),
+            Kind::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                power,
+            } => area::quad_incident(*corner, *edge_u, *edge_v, *power, x, u),
+            Kind::Mesh(mesh) => mesh.incident(x, u),
+            Kind::Distant(distant) => Some(distant.incident()),
+            Kind::Environment(environment) => environment.incident(n, u),
+        }
+    }
+}
+
+/// Emission from one light towards its targets, with all that stays the same from photon to
+/// photon worked out once: the tracer draws millions of photons from each light. With targets,
+/// directions are drawn only towards them (when the emission point is outside them all, see
+/// [`super::aim::UnionOfCones`] and [`super::aim_grid::AimGrid`]) and the flux is weighted by
+/// the solid angle kept; lights at infinity start their photons on the targets' discs.
+#[derive(Clone, Debug)]
+pub struct LightEmitter {
+    source: Source,
+    aim: Vec<BoundingSphere>,
+}
+
+#[derive(Clone, Debug)]
+enum Source {
+    Point(point::PointEmitter),
+    Spot(point::SpotEmitter),
+    Sphere(area::SphereEmitter),
+    Quad(area::QuadEmitter),
+    Mesh(Arc<area::MeshLight>),
+    Distant(infinite::DistantEmitter),
+    Environment(infinite::EnvironmentEmitter),
+}
+
+impl LightEmitter {
+    pub fn new(light: &LightSource, aim: &[BoundingSphere]) -> Self {
+        let source = match &light.0 {
+            Kind::Point { position, power } => {
+                Source::Point(point::PointEmitter::new(*position, *power, aim))
+            }
+            Kind::Spot(spot) => Source::Spot(point::SpotEmitter::new(spot, aim)),
+            Kind::Sphere {
+                center,
+                radius,
+                power,
+            } => Source::Sphere(area::SphereEmitter::new(*center, *radius, *power, aim)),
+            Kind::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                power,
+            } => Source::Quad(area::QuadEmitter::new(
+                *corner, *edge_u, *edge_v, *power, aim,
+            )),
+            Kind::Mesh(mesh) => Source::Mesh(Arc::clone(mesh)),
+            Kind::Distant(distant) => Source::Distant(infinite::DistantEmitter::new(distant, aim)),
+            Kind::Environment(environment) => {
+                Source::Environment(infinite::EnvironmentEmitter::new(environment, aim))
+            }
+        };
+        Self {
+            source,
+            aim: aim.to_vec(),
+        }
+    }
+
+    /// One photon, drawn from `rng`.
+    #[inline(always)]
+    pub fn emit(&self, rng: &mut Rng) -> Emission {
+        // The emitters by reference: their prepared unions are large, and a copy per photon
+        // showed.
+        match &self.source {
+            Source::Point(point) => point.emit(rng),
+            Source::Spot(spot) => spot.emit(rng),
+            Source::Sphere(sphere) => sphere.emit(&self.aim, rng),
+            Source::Quad(quad) => quad.emit(&self.aim, rng),
+            Source::Mesh(mesh) => mesh.emit(&self.aim, rng),
+            Source::Distant(distant) => distant.emit(rng),
+            Source::Environment(environment) => environment.emit(rng),
+        }
+    }
+}
