@@ -5,13 +5,13 @@
 #[path = "support/mod.rs"]
 mod support;
 
-use dpm::scene::{LoadOptions, load_pbrt_from};
+use dpm::scene::{LoadOptions, load_from};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let files = support::files(data, "scene.pbrt");
     let strict = data.first().is_some_and(|b| b & 1 == 1);
-    match load_pbrt_from(&support::scene_path("scene.pbrt"), &files, &LoadOptions { strict }) {
+    match load_from(&support::scene_path("scene.pbrt"), &files, &LoadOptions { strict }) {
         Ok((scene, _report)) => support::check_scene(&scene),
         Err(e) => support::check_error(&e),
     }

@@ -80,3 +80,33 @@ impl SceneFiles for InMemory {
         normal(path)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn in_memory_files_are_found_through_dot_and_dot_dot() {
+        let mut files = InMemory::default();
+        files.insert("fuzz/meshes/a.obj", "v 0 0 0");
+        assert_eq!(
+            files.read(Path::new("fuzz/./x/../meshes/a.obj")).unwrap(),
+            b"v 0 0 0"
+        );
+        assert_eq!(
+            files.read(Path::new("fuzz/b.obj")).unwrap_err().kind(),
+            io::ErrorKind::NotFound
+        );
+        assert_eq!(
+            files.identity(Path::new("fuzz/./meshes/a.obj")),
+            files.identity(Path::new("fuzz/meshes/a.obj"))
+        );
+    }
+
+    #[test]
+    fn the_disk_refuses_a_directory() {
+        let dir = std::env::temp_dir();
+        assert!(Disk.is_dir(&dir));
+        assert!(Disk.read(&dir).is_err());
+    }
+}

@@ -5,6 +5,7 @@
 //! errors about the file as a whole name the scene's `file` field. Must not call Embree.
 
 use super::document::{Document, child_path};
+use super::files::SceneFiles;
 use super::rules::{has_zero_area, is_ior, is_unit_channel};
 use super::validate::{MaterialTable, MeshPlacement};
 use super::{Material, SceneError, TriangleMesh};
@@ -18,6 +19,8 @@ pub(crate) struct LoadedMesh {
     /// One mesh per material, in order of first use in the OBJ.
     pub meshes: Vec<TriangleMesh>,
     pub degenerate_triangles_dropped: usize,
+    /// Material libraries that could not be read (an error only where faces need them).
+    pub warnings: Vec<String>,
 }
 
 /// A material library that tobj read; its materials follow those of earlier libraries in
@@ -35,9 +38,10 @@ pub(crate) fn load(
     scene_folder: &Path,
     placement: &MeshPlacement,
     materials: &mut MaterialTable,
+    files: &dyn SceneFiles,
 ) -> Result<LoadedMesh, SceneError> {
     let file_field = child_path(path, "file");
-    let obj = ObjFile::read(doc, &scene_folder.join(&placement.file), &file_field)?;
+    let obj = ObjFile::read(doc, &scene_folder.join(&placement.file), &file_field, files)?;
     let whole_file_error =
         |why: String| doc.error(&file_field, format!("`{}` {why}", obj.path.display()));
 
@@ -74,9 +78,15 @@ pub(crate) fn load(
             "has no faces".to_string()
         }));
     }
+    let warnings = obj
+        .library_failures
+        .iter()
+        .map(|failure| format!("{failure} (its materials are not available)"))
+        .collect();
     Ok(LoadedMesh {
         meshes,
         degenerate_triangles_dropped: dropped,
+        warnings,
     })
 }
 
@@ -87,6 +97,7 @@ pub(crate) fn load_emitter(
     path: &str,
     scene_folder: &Path,
     placement: &MeshPlacement,
+    files: &dyn SceneFiles,
 ) -> Result<(TriangleMesh, usize), SceneError> {
     let placement = MeshPlacement {
         file: placement.file.clone(),
@@ -100,6 +111,7 @@ pub(crate) fn load_emitter(
         scene_folder,
         &placement,
         &mut MaterialTable::default(),
+        files,
     )?;
     let mesh = loaded.meshes.into_iter().next().expect("load gives a mesh");
     Ok((mesh, loaded.degenerate_triangles_dropped))
@@ -114,19 +126,25 @@ struct ObjFile {
     /// All libraries' materials, in tobj's numbering.
     materials: Vec<tobj::Material>,
     libraries: Vec<MtlLibrary>,
-    /// The first library that could not be read or parsed; an error only if a face needs it.
-    library_failure: Option<SceneError>,
+    /// Libraries that could not be read or parsed; an error only where a face's material is
+    /// in none of the libraries that could.
+    library_failures: Vec<SceneError>,
 }
 
 impl ObjFile {
-    fn read(doc: &Document, path: &Path, file_field: &str) -> Result<ObjFile, SceneError> {
-        let text = read_text(path)
+    fn read(
+        doc: &Document,
+        path: &Path,
+        file_field: &str,
+        files: &dyn SceneFiles,
+    ) -> Result<ObjFile, SceneError> {
+        let text = read_text(path, files)
             .map_err(|why| doc.error(file_field, format!("`{}` {why}", path.display())))?;
         check_obj_numbers(&text).map_err(|(line, why)| located(path, line, file_field, why))?;
 
         let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let libraries = RefCell::new(Vec::<MtlLibrary>::new());
-        let library_failure = RefCell::new(None::<SceneError>);
+        let library_failures = RefCell::new(Vec::<SceneError>::new());
         let consumed = Cell::new(0);
         let options = tobj::LoadOptions {
             triangulate: true,
@@ -137,22 +155,50 @@ impl ObjFile {
         let loaded = tobj::load_obj_buf(
             &mut CountingReader::new(text.as_bytes(), &consumed),
             &options,
-            |library_name| match read_library(&folder.join(library_name)) {
-                Ok((library, result)) => {
-                    libraries.borrow_mut().push(library);
-                    result
+            |named| {
+                // `mtllib a.mtl b.mtl` names two libraries (tobj hands over the whole rest of
+                // the line); a single name with spaces is taken whole when that file exists.
+                let whole = named.to_string_lossy().trim().to_string();
+                let names: Vec<String> = if files.read(&folder.join(&whole)).is_ok() {
+                    vec![whole]
+                } else {
+                    whole.split_whitespace().map(String::from).collect()
+                };
+                let mut all: Vec<tobj::Material> = Vec::new();
+                // tobj's own map type, taken from the first library read.
+                let mut by_name = None;
+                for name in names {
+                    match read_library(&folder.join(&name), files) {
+                        Ok((library, result)) => {
+                            let Ok((materials, map)) = result else {
+                                continue;
+                            };
+                            let names = by_name.get_or_insert_with(|| {
+                                let mut empty = map.clone();
+                                empty.clear();
+                                empty
+                            });
+                            for m in materials {
+                                names.entry(m.name.clone()).or_insert(all.len());
+                                all.push(m);
+                            }
+                            libraries.borrow_mut().push(library);
+                        }
+                        Err(failure) => {
+                            let failure = failure.unwrap_or_else(|why| {
+                                // Unreadable: blame the `mtllib` statement being parsed.
+                                located(path, line_of_byte(&text, consumed.get()), "", why)
+                            });
+                            library_failures.borrow_mut().push(SceneError {
+                                field: file_field.to_string(),
+                                ..failure
+                            });
+                        }
+                    }
                 }
-                Err(failure) => {
-                    let failure = failure.unwrap_or_else(|why| {
-                        // Unreadable: blame the `mtllib` statement being parsed.
-                        located(path, line_of_byte(&text, consumed.get()), "", why)
-                    });
-                    let failure = SceneError {
-                        field: file_field.to_string(),
-                        ..failure
-                    };
-                    library_failure.borrow_mut().get_or_insert(failure);
-                    Err(tobj::LoadError::OpenFileFailed)
+                match by_name {
+                    Some(names) => Ok((all, names)),
+                    None => Err(tobj::LoadError::OpenFileFailed),
                 }
             },
         );
@@ -166,7 +212,7 @@ impl ObjFile {
             models,
             materials: materials.unwrap_or_default(),
             libraries: libraries.into_inner(),
-            library_failure: library_failure.into_inner(),
+            library_failures: library_failures.into_inner(),
         })
     }
 
@@ -179,14 +225,14 @@ impl ObjFile {
         mapped: &mut HashMap<usize, u32>,
         table: &mut MaterialTable,
     ) -> Result<u32, SceneError> {
-        if let Some(failure) = &self.library_failure {
-            return Err(failure.clone());
-        }
         let Some(id) = model
             .mesh
             .material_id
             .filter(|&id| id < self.materials.len())
         else {
+            if let Some(failure) = self.library_failures.first() {
+                return Err(failure.clone());
+            }
             return Err(doc.error(
                 &child_path(object_path, "material"),
                 format!(
@@ -346,8 +392,9 @@ fn library_of<'a>(
 #[allow(clippy::type_complexity)]
 fn read_library(
     path: &Path,
+    files: &dyn SceneFiles,
 ) -> Result<(MtlLibrary, tobj::MTLLoadResult), Result<SceneError, String>> {
-    let text = read_text(path)
+    let text = read_text(path, files)
         .map_err(|why| Err(format!("material library `{}` {why}", path.display())))?;
     if let Err((line, why)) = check_mtl_colours(&text) {
         return Err(Ok(located(path, line, "", why)));
@@ -435,11 +482,13 @@ fn check_mtl_colours(text: &str) -> Result<(), (usize, String)> {
     Ok(())
 }
 
-fn read_text(path: &Path) -> Result<String, String> {
-    if path.is_dir() {
+fn read_text(path: &Path, files: &dyn SceneFiles) -> Result<String, String> {
+    if files.is_dir(path) {
         return Err("is a directory, not a file".into());
     }
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot be read: {e}"))?;
+    let bytes = files
+        .read(path)
+        .map_err(|e| format!("cannot be read: {e}"))?;
     String::from_utf8(bytes).map_err(|_| "is not UTF-8 text".into())
 }
 

@@ -259,27 +259,21 @@ pub fn load_with_report(path: &Path) -> Result<(SceneDescription, LoadReport), S
     load_with_options(path, &LoadOptions::default())
 }
 
-/// A pbrt scene read from `files` (the fuzz targets' in-memory set).
-pub fn load_pbrt_from(
-    path: &Path,
-    files: &dyn files::SceneFiles,
-    options: &LoadOptions,
-) -> Result<(SceneDescription, LoadReport), SceneError> {
-    pbrt::load(path, files, options)
-}
-
 /// [`load_with_report`] with `options`.
 pub fn load_with_options(
     path: &Path,
     options: &LoadOptions,
 ) -> Result<(SceneDescription, LoadReport), SceneError> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("pbrt"))
-        && !path.is_dir()
-    {
-        return pbrt::load(path, &files::Disk, options);
-    }
+    load_from(path, &files::Disk, options)
+}
+
+/// [`load_with_options`], reading the scene and every file it names from `files` (the fuzz
+/// targets give an in-memory set).
+pub fn load_from(
+    path: &Path,
+    files: &dyn files::SceneFiles,
+    options: &LoadOptions,
+) -> Result<(SceneDescription, LoadReport), SceneError> {
     let whole_file_error = |message: String| SceneError {
         file: path.to_path_buf(),
         line: None,
@@ -287,13 +281,20 @@ pub fn load_with_options(
         field: "scene".into(),
         message,
     };
-    if path.is_dir() {
+    if files.is_dir(path) {
         return Err(whole_file_error("is a directory, not a scene file".into()));
     }
-    let bytes = std::fs::read(path)
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pbrt"))
+    {
+        return pbrt::load(path, files, options);
+    }
+    let bytes = files
+        .read(path)
         .map_err(|err| whole_file_error(format!("cannot read the scene file: {err}")))?;
     let text = String::from_utf8(bytes).map_err(|err| not_utf8(path, err))?;
-    parse(&text, path)
+    parse_with(&text, path, files)
 }
 
 /// A scene file that is not UTF-8 text: the error points at the first bad byte's line.
@@ -320,6 +321,15 @@ fn not_utf8(path: &Path, err: std::string::FromUtf8Error) -> SceneError {
 /// Reads a scene from `text` as if it were the file `source` (which names it in errors and
 /// anchors relative mesh paths; it need not exist when the scene has no meshes).
 pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport), SceneError> {
+    parse_with(text, source, &files::Disk)
+}
+
+/// [`parse`], reading the meshes and material libraries it names from `files`.
+pub fn parse_with(
+    text: &str,
+    source: &Path,
+    files: &dyn files::SceneFiles,
+) -> Result<(SceneDescription, LoadReport), SceneError> {
     let doc = document::Document::parse(source, text)?;
     let spec = format::read_scene(&doc)?;
     let scene_folder = source.parent().unwrap_or(Path::new("")).to_path_buf();
@@ -332,7 +342,8 @@ pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport)
         lights.push(match light {
             format::LightSpec::Mesh(mesh_spec) => {
                 let placement = validate::mesh_placement(&doc, &path, mesh_spec.into(), None)?;
-                let (mesh, dropped) = mesh::load_emitter(&doc, &path, &scene_folder, &placement)?;
+                let (mesh, dropped) =
+                    mesh::load_emitter(&doc, &path, &scene_folder, &placement, files)?;
                 report.degenerate_triangles_dropped += dropped;
                 validate::mesh_light(&doc, &path, mesh, mesh_spec)?
             }
@@ -359,8 +370,16 @@ pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport)
             format::ObjectSpec::Mesh(mesh_spec) => {
                 let placement =
                     validate::mesh_object_placement(&doc, &path, mesh_spec, &materials)?;
-                let loaded = mesh::load(&doc, &path, &scene_folder, &placement, &mut materials)?;
+                let loaded = mesh::load(
+                    &doc,
+                    &path,
+                    &scene_folder,
+                    &placement,
+                    &mut materials,
+                    files,
+                )?;
                 report.degenerate_triangles_dropped += loaded.degenerate_triangles_dropped;
+                report.warnings.extend(loaded.warnings);
                 shapes.extend(loaded.meshes.into_iter().map(Shape::Triangles));
             }
         }
@@ -373,6 +392,8 @@ pub fn parse(text: &str, source: &Path) -> Result<(SceneDescription, LoadReport)
         materials: materials.into_materials(),
         shapes,
     };
-    report.warnings = validate::enclosed_light_warnings(&scene);
+    report
+        .warnings
+        .extend(validate::enclosed_light_warnings(&scene));
     Ok((scene, report))
 }
