@@ -2,10 +2,11 @@
 //! format gives: the part of the format that photon mapping with dpm's materials can
 //! represent is mapped (docs/scene-format.md, "pbrt scenes", lists what is read, mapped with a
 //! warning, and refused), the rest is refused with an error naming file, line and column.
-//! Owns pbrt's language (`lexer`, `params`, `parser`) and its mapping onto dpm's types
+//! Owns pbrt's language (`lexer`, `params`, `args`, `parser`) and its mapping onto dpm's types
 //! (`mapping`); must not call Embree, and leaves the checks every scene gets to the
 //! [`super`] module's validation.
 
+mod args;
 mod lexer;
 mod mapping;
 mod params;

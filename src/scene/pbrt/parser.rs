@@ -5,8 +5,9 @@
 //! files, for [`super::mapping`] to turn into dpm's types. Owns the language and `Include`;
 //! must not decide what dpm can render.
 
+use super::args::Args;
 use super::lexer::{Token, TokenKind, tokens};
-use super::params::{ParamError, ParamList, show};
+use super::params::{ParamList, show};
 use super::{Dialect, PbrtError, Place};
 use crate::scene::files::SceneFiles;
 use crate::scene::transform::rotation;
@@ -596,138 +597,4 @@ fn look_at(eye: Vec3, look: Vec3, up: Vec3) -> Result<Mat4, String> {
         eye.extend(1.0),
     );
     Ok(camera_to_world.inverse())
-}
-
-/// A directive's arguments: the tokens after its name.
-struct Args<'a> {
-    tokens: &'a [Token],
-    at: &'a mut usize,
-    place: &'a Place,
-    directive: &'a str,
-}
-
-impl Args<'_> {
-    fn param_error(&self, e: ParamError) -> PbrtError {
-        PbrtError {
-            file: self.place.file.clone(),
-            line: Some(e.line),
-            column: Some(e.column),
-            field: format!("{} {}", self.directive, e.field),
-            message: e.message,
-        }
-    }
-
-    fn next(&mut self, what: &str) -> Result<&Token, PbrtError> {
-        let t = self.tokens.get(*self.at).ok_or_else(|| {
-            self.place
-                .error(self.directive, format!("the file ends before its {what}"))
-        })?;
-        *self.at += 1;
-        Ok(t)
-    }
-
-    fn error_at(&self, t: &Token, message: String) -> PbrtError {
-        PbrtError {
-            file: self.place.file.clone(),
-            line: Some(t.line),
-            column: Some(t.column),
-            field: self.directive.into(),
-            message,
-        }
-    }
-
-    fn string(&mut self, what: &str) -> Result<String, PbrtError> {
-        let t = self.next(what)?.clone();
-        match &t.kind {
-            TokenKind::Str(s) => Ok(s.clone()),
-            other => Err(self.error_at(
-                &t,
-                format!(
-                    "expected its {what} as a quoted string, found {}",
-                    show(other)
-                ),
-            )),
-        }
-    }
-
-    fn word(&mut self) -> Result<String, PbrtError> {
-        let t = self.next("argument")?.clone();
-        match &t.kind {
-            TokenKind::Word(s) | TokenKind::Str(s) => Ok(s.clone()),
-            other => Err(self.error_at(&t, format!("expected a word, found {}", show(other)))),
-        }
-    }
-
-    fn number(&mut self) -> Result<f32, PbrtError> {
-        let t = self.next("numbers")?.clone();
-        match &t.kind {
-            TokenKind::Number(n) => match n.parse::<f32>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                _ => Err(self.error_at(&t, format!("`{n}` is not a finite number"))),
-            },
-            other => Err(self.error_at(&t, format!("expected a number, found {}", show(other)))),
-        }
-    }
-
-    fn numbers<const N: usize>(&mut self) -> Result<[f32; N], PbrtError> {
-        let bracketed = matches!(
-            self.tokens.get(*self.at),
-            Some(Token {
-                kind: TokenKind::Open,
-                ..
-            })
-        );
-        if bracketed {
-            *self.at += 1;
-        }
-        let mut v = [0.0; N];
-        for x in &mut v {
-            *x = self.number()?;
-        }
-        if bracketed {
-            let t = self.next("closing `]`")?.clone();
-            if t.kind != TokenKind::Close {
-                return Err(self.error_at(
-                    &t,
-                    format!("expected `]` after {N} numbers, found {}", show(&t.kind)),
-                ));
-            }
-        }
-        Ok(v)
-    }
-
-    /// Sixteen numbers, column by column as pbrt writes them (the last four are the translation).
-    fn matrix(&mut self) -> Result<Mat4, PbrtError> {
-        let m = Mat4::from_cols_array(&self.numbers::<16>()?);
-        if !m.is_finite() {
-            return Err(self.place.error(self.directive, "the matrix is not finite"));
-        }
-        Ok(m)
-    }
-
-    /// `"type"` then a parameter list.
-    fn item(&mut self) -> Result<Item, PbrtError> {
-        let kind = self.string("type")?;
-        let params = ParamList::read(self.tokens, self.at).map_err(|e| self.param_error(e))?;
-        if let Some(t) = self.tokens.get(*self.at)
-            && matches!(
-                t.kind,
-                TokenKind::Str(_) | TokenKind::Number(_) | TokenKind::Open
-            )
-        {
-            return Err(self.error_at(
-                t,
-                format!(
-                    "{} is not a parameter (\"type name\") of {} \"{kind}\"",
-                    show(&t.kind),
-                    self.directive
-                ),
-            ));
-        }
-        Ok(Item {
-            kind,
-            params,
-            at: self.place.clone(),
-        })
-    }
 }
