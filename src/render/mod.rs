@@ -7,6 +7,7 @@
 //! photon map files ([`photon_files`]). Owns
 //! pixels, sample placement and accumulation; must not parse scenes or store photons.
 
+pub mod args;
 pub mod camera;
 pub mod film;
 pub mod film_file;

@@ -1,14 +1,18 @@
-//! `dpm render` from the command line to the files: the flags, then the pass loop. Scene file →
-//! Embree world → for each pass ([`super::pass`]: its maps, its estimates, its pixels) → the
-//! [`Film`] → `-o`, `--film` and the kernel field, rewritten atomically as passes complete,
-//! with a progress bar over the passes and a per-phase timing table at the end. Owns the flags,
-//! the pass budget (`--passes`, `--time`), resuming and writing; must not implement any stage.
+//! `dpm render` from the command line to the files: the flags ([`super::args`]) checked
+//! together, then the pass loop. Scene file → Embree world → for each pass ([`super::pass`]:
+//! its maps, its estimates, its pixels) → the [`Film`] → `-o`, `--film` and the kernel field,
+//! rewritten atomically as passes complete, with a progress bar over the passes and a
+//! per-phase timing table at the end. Owns checking the flags, the pass budget (`--passes`, `--time`), resuming and writing; must not implement any stage.
 //!
 //! The loop: passes run from the first (`--first-pass`, or the end of a `--resume`d film) for
 //! `--passes` passes, or while the time budget lasts: a pass whose predicted time (the mean of
 //! this run's pass times) would overrun `--time` is not started, though the first pass always
 //! runs. Ctrl-C ends the current pass unfinished and writes the film of the complete ones.
 
+pub use super::args::{
+    DEFAULT_CAUSTIC_PHOTONS, DEFAULT_GLASS_SPLIT_DEPTH, DEFAULT_GLOBAL_PHOTONS, DEFAULT_PASSES,
+    MAX_IRRADIANCE_STRIDE, MAX_LIGHT_SAMPLES, RenderArgs, parse_resolution,
+};
 use super::camera::PinholeCamera;
 use super::film::{Film, FilmHeader};
 use super::film_file::{self, FilmFileError};
@@ -16,10 +20,8 @@ use super::memory_budget::check_memory;
 use super::output::{write_film_image, write_kernel_field};
 use super::pass::{BaseRadii, PassContext, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
 use super::photon_files::{load_maps, save_maps, validate_photon_files};
-use super::schedule::{DEFAULT_ALPHA, MAX_PASSES, Schedule};
+use super::schedule::{MAX_PASSES, Schedule};
 use crate::embree::{self, EmbreeError};
-use crate::estimate::EstimatorFlags;
-use crate::estimate::precomputed::DEFAULT_STRIDE;
 use crate::estimate::settings::{EstimateError, EstimatorKind};
 use crate::image_io::{self, Image, ImageError, ImageFormat};
 use crate::photon::store::{self, StoreError};
@@ -30,173 +32,6 @@ use crate::world::World;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-
-#[derive(Clone, Debug, clap::Args)]
-pub struct RenderArgs {
-    /// Scene file: dpm's TOML, or a pbrt-v3/v4 scene by the `.pbrt` extension (see
-    /// docs/scene-format.md).
-    pub scene: PathBuf,
-
-    /// Refuse a pbrt material dpm can only approximate (uber, plastic, rough metals, ...)
-    /// instead of rendering its diffuse part with a warning.
-    #[arg(long)]
-    pub strict: bool,
-
-    /// Output image; the format follows the extension: .png (tone-mapped sRGB), .exr (linear
-    /// float RGB, with direct, caustic and indirect layers and, with the diffusion estimate,
-    /// the kernel field), .pfm (linear float RGB). Rewritten atomically as passes complete.
-    /// Default: the scene's name with .png.
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
-
-    /// Worker threads (0: one per core). The image does not depend on it.
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
-    pub threads: usize,
-
-    /// Seed of every random number (photon paths and pixel samples of every pass).
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
-    pub seed: u64,
-
-    /// Progressive passes to render. Each traces fresh photons, shrinks every radius by
-    /// r²(i+1) = r²(i)·(i+α)/(i+1) and renders fresh pixel samples; the image is their mean,
-    /// and converges as passes accumulate. Default: 8 (1 with --save-photons or
-    /// --load-photons; with --time, as many as the budget holds).
-    #[arg(long, allow_negative_numbers = true)]
-    pub passes: Option<u64>,
-
-    /// Wall-clock budget in seconds: passes run until the next one (predicted from the mean
-    /// pass time so far) would overrun it. The first pass always runs.
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
-    pub time: Option<f64>,
-
-    /// Index of the first pass (passes are the same whichever run renders them, so ranges
-    /// rendered apart can be merged with `dpm merge`).
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
-    pub first_pass: u64,
-
-    /// α of the progressive radius reduction, in (0, 1) (Knaus and Zwicker: 2/3).
-    #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
-    pub ppm_alpha: f64,
-
-    /// Save the film (per-pixel sums of every pass, with the scene's hash, seed and settings)
-    /// to FILE after every pass, atomically: `--resume FILE` continues it, `dpm merge` combines it.
-    #[arg(long, value_name = "FILE")]
-    pub film: Option<PathBuf>,
-
-    /// Continue the film in FILE (same scene, seed and settings): passes start where it ends.
-    /// It is rewritten there unless --film names another file.
-    #[arg(long, value_name = "FILE")]
-    pub resume: Option<PathBuf>,
-
-    /// Rewrite -o (and --film) at most every this many seconds (0: after every pass); the
-    /// last pass is always written.
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        default_value_t = 0.0,
-        allow_negative_numbers = true
-    )]
-    pub write_every: f64,
-
-    /// A reference image (.pfm or .exr, same resolution) to report the error against after
-    /// every pass (relative MSE, in the progress bar and --stats).
-    #[arg(long, value_name = "IMAGE")]
-    pub reference: Option<PathBuf>,
-
-    /// Render at WIDTHxHEIGHT pixels instead of the scene's `resolution` (e.g. 1280x720). The
-    /// vertical field of view stays the scene's `fov_y`, so a wider image sees more at the
-    /// sides. A film remembers its resolution: --resume and `dpm merge` refuse another.
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution, allow_hyphen_values = true)]
-    pub resolution: Option<(u32, u32)>,
-
-    /// Camera samples per pixel in each pass, stratified within the pixel across samples and
-    /// passes (one Owen-scrambled Sobol sequence per pixel).
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
-    pub spp: u32,
-
-    /// Exposure in stops for PNG output (linear formats are written unscaled).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub exposure: f32,
-
-    /// Mirror and glass bounces followed from the eye.
-    #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
-    pub max_depth: u32,
-
-    /// Photons STORED in each pass's caustic map (light → specular+ → diffuse); paths are
-    /// emitted until this many are stored. Only built when the scene has a mirror or glass
-    /// object; 0 turns caustics off.
-    #[arg(long, default_value_t = DEFAULT_CAUSTIC_PHOTONS, allow_negative_numbers = true)]
-    pub caustic_photons: usize,
-
-    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 200000 when
-    /// the scene has two or more diffuse objects (so diffuse light can bounce between them),
-    /// else 0 (no global map: a lone plane cannot light itself).
-    #[arg(long, allow_negative_numbers = true)]
-    pub global_photons: Option<usize>,
-
-    /// Final-gather rays per diffuse eye hit for indirect light; 0 (the default) shows the
-    /// global map's estimate directly: over progressive passes its blotches average out and
-    /// its corner darkening shrinks with the radius, and it reached every error sooner than
-    /// 1 or 4 gather rays did (README, "Choosing the defaults").
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
-    pub final_gather: u32,
-
-    /// Photons per global-map estimate (constant kernel, k-th photon left out).
-    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
-    pub global_k: usize,
-
-    /// With final gathering, the global estimate is computed once per pass at one photon in N
-    /// of the global map and a gather ray reads the nearest such point whose normal
-    /// agrees (Christensen's precomputed irradiance) instead of running its own estimate;
-    /// 0 turns it off (a k-NN estimate per gather ray).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true)]
-    pub irradiance_stride: usize,
-
-    /// Shadow rays per area light (sphere, quad or mesh) and per environment at each diffuse
-    /// eye hit, stratified and averaged; a point, spot or distant light takes one.
-    #[arg(
-        long,
-        value_name = "N",
-        default_value_t = 1,
-        allow_negative_numbers = true
-    )]
-    pub light_samples: u32,
-
-    /// Glass hits along an eye path that follow both the reflected and the refracted ray
-    /// (weighted by the Fresnel reflectance); past them a path follows one, chosen with that
-    /// probability. Splitting every hit costs up to 2^depth rays a pixel through thick glass
-    /// for detail a few more passes average in anyway; 0 is pure sampling, 1000 splits every
-    /// hit (the Whitted tracer).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_GLASS_SPLIT_DEPTH)]
-    pub glass_split_depth: u32,
-
-    /// Caustic radiance estimate.
-    #[command(flatten)]
-    pub estimate: EstimatorFlags,
-
-    /// Also write the diffusion kernel's shape at each pixel's first diffuse hit (hue = edge
-    /// direction, brightness = 1 − λ2, averaged over passes), like the paper's Figure 2b.
-    /// Needs --estimator diffusion.
-    #[arg(long)]
-    pub kernel_field: Option<PathBuf>,
-
-    /// Write the per-phase times, counts and per-pass errors as JSON.
-    #[arg(long)]
-    pub stats: Option<PathBuf>,
-
-    /// Save pass 0's photon maps to FILE (versioned binary with a checksum, written
-    /// atomically) right after tracing, so a later one-pass render can skip tracing with
-    /// --load-photons.
-    #[arg(long, value_name = "FILE")]
-    pub save_photons: Option<PathBuf>,
-
-    /// Load the photon maps from FILE (made by --save-photons) instead of tracing them, for a
-    /// one-pass render. The file must come from the same scene (lights, materials,
-    /// geometry), --seed and photon counts; the image is then identical to one from freshly
-    /// traced maps.
-    #[arg(long, value_name = "FILE")]
-    pub load_photons: Option<PathBuf>,
-}
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -387,37 +222,6 @@ pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
         .map_err(|e| RenderError::Invalid(format!("--threads {}: {e}", args.threads)))?;
     pool.install(|| run_in_pool(args, output))
 }
-
-/// `--resolution`'s value: two whole numbers >= 1 joined by `x` (`1280x720`).
-pub fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
-    let wanted = "expected WIDTHxHEIGHT in pixels, e.g. 1280x720";
-    let (width, height) = text
-        .trim()
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("no `x` between width and height: {wanted}"))?;
-    let side = |what: &str, value: &str| match value.trim().parse::<u32>() {
-        Ok(0) => Err(format!("the {what} is 0: it must be at least 1 pixel")),
-        Ok(pixels) => Ok(pixels),
-        Err(_) => Err(format!(
-            "the {what} `{value}` is not a whole number of pixels: {wanted}"
-        )),
-    };
-    Ok((side("width", width)?, side("height", height)?))
-}
-
-/// Most shadow rays per area light a diffuse hit may take (more is a typo, not a setting).
-pub const MAX_LIGHT_SAMPLES: u32 = 4096;
-/// Largest `--irradiance-stride`: beyond it the table is too sparse to stand for the map.
-pub const MAX_IRRADIANCE_STRIDE: usize = 1 << 16;
-
-/// Passes per render by default: chosen by measurement (README, "Choosing the defaults").
-pub const DEFAULT_PASSES: u64 = 8;
-/// Stored caustic photons per pass by default.
-pub const DEFAULT_CAUSTIC_PHOTONS: usize = 100_000;
-/// Stored global photons per pass by default (scenes with two or more diffuse objects).
-pub const DEFAULT_GLOBAL_PHOTONS: usize = 200_000;
-/// Glass hits that split an eye path by default (README, "Whole scenes").
-pub const DEFAULT_GLASS_SPLIT_DEPTH: u32 = 1000;
 
 /// The passes asked for: --passes, else one for a photon-map file's single pass, else the
 /// default (with --time and no --passes the budget decides instead).
