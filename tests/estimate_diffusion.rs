@@ -453,3 +453,61 @@ fn step_edge_photons_for_noise_test() -> Vec<Photon> {
     ));
     photons
 }
+
+/// The kernel's sum, however the scan takes it (leaves skipped, added whole from their
+/// moments, or streamed in lanes), against a sum over every photon with the kernel's own
+/// shape: coloured photons of random power on a step edge, a wall across it (leaves holding
+/// both surfaces), queries round and squeezed, on the plane and a hair above it.
+#[test]
+fn the_kernel_sum_equals_a_sum_over_every_photon() {
+    let mut rng = Rng(7);
+    let mut photons: Vec<Photon> = small_edge(3, 900.0, Vec3::ONE)
+        .into_iter()
+        .map(|p| {
+            let power = Vec3::new(
+                rng.range(0.2, 1.0),
+                rng.range(0.0, 2.0),
+                rng.range(0.5, 0.6),
+            );
+            plane_photon(p.position().x, p.position().y, 0.0, power, Vec3::Z)
+        })
+        .collect();
+    for _ in 0..3000 {
+        let (y, z) = (rng.range(0.0, 4.0), rng.range(0.0, 0.5));
+        photons.push(plane_photon(0.3, y, z, Vec3::splat(0.7), Vec3::X));
+    }
+    let d = with(1.0, |p| p.min_kernel_photons = 8.0);
+    let map = prepared(photons.clone(), &d);
+    let (r, lambda3) = (d.params().radius as f64, d.params().lambda3);
+    let mut squeezed = 0;
+    for mut q in edge_queries() {
+        for lift in [0.0, 0.01] {
+            q.position.z = lift;
+            let s = shape(&d, &map, &q);
+            squeezed += usize::from(s.lambda2 < 0.5);
+            let (x1, x2) = (s.x1.as_dvec3(), s.x2.as_dvec3());
+            let mut want = glam::DVec3::ZERO;
+            for p in photons.iter().filter(|p| p.normal().dot(q.normal) >= 0.5) {
+                let o = (p.position() - q.position).as_dvec3();
+                let y = (o.dot(x1).powi(2)
+                    + o.dot(x2).powi(2) / s.lambda2 as f64
+                    + o.z.powi(2) / lambda3)
+                    / (r * r);
+                if y < 1.0 {
+                    want += (1.0 - y) * p.power().as_dvec3();
+                }
+            }
+            let want = want * (2.0 / std::f64::consts::PI) / (r * r * (s.lambda2 as f64).sqrt());
+            let got = estimate(&d, &map, &q).as_dvec3();
+            for c in 0..3 {
+                assert!(
+                    (got[c] - want[c]).abs() <= 2e-4 * want[c].max(1.0),
+                    "{:?} λ2 {}: {got} vs {want}",
+                    q.position,
+                    s.lambda2
+                );
+            }
+        }
+    }
+    assert!(squeezed >= 8, "only {squeezed} squeezed queries");
+}

@@ -6,8 +6,8 @@
 //! and split planes (~0.3): about 24.3 bytes per photon. The [`GradientField`], while a
 //! diffusion estimate reads the map, adds 16 per photon (the decoded power and the channel
 //! sum as f32 arrays in slot order, which the estimate's leaf scans stream through), 32 per
-//! gradient site (every photon, except where sites are thinned) and 136 per leaf of 10–20
-//! photons (its box, channel-sum moments and shared normal): at most about 90 in all
+//! gradient site (every photon, except where sites are thinned) and 256 per leaf of 10–20
+//! photons (its box, channel-sum and RGB power moments, shared normal): at most about 90 in all
 //! ([`PhotonMap::bytes_per_photon`]), freed with the pass's map.
 
 use super::{KdTree, Photon, PhotonAttributes};
@@ -200,6 +200,20 @@ pub struct LeafMoments {
     pub phi: (f64, glam::DVec3, f64),
     /// `Σ φ²`, `Σ φ² u`, `Σ φ² |u|²`.
     pub phi2: (f64, glam::DVec3, f64),
+    /// The RGB powers' moments, for the anisotropic kernel.
+    pub power: PowerMoments,
+}
+
+/// A leaf's RGB photon powers (the field's power columns) about its box's centre, `u = x − c`:
+/// `Σ Φ`, `Σ Φ u_j` and `Σ Φ u_i u_j`. Enough to add `Σ (1 − dᵀMd) Φ` for any quadratic form
+/// `M` (the diffusion kernel's ellipsoid) over a leaf that lies wholly inside it, at once.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PowerMoments {
+    pub sum: Vec3,
+    /// `Σ Φ u_x`, `Σ Φ u_y`, `Σ Φ u_z`.
+    pub first: [Vec3; 3],
+    /// `Σ Φ u_i u_j` for (i, j) = xx, xy, xz, yy, yz, zz.
+    pub second: [Vec3; 6],
 }
 
 /// A leaf's sites for a scan: position, gradient and weight columns.
@@ -299,6 +313,8 @@ impl GradientField {
             field.leaf_sites.push(field.site_slot.len() as u32);
         }
         let channel = &field.channel_sum;
+        let power = &field.power;
+        let field_power = |s: usize| Vec3::new(power[0][s], power[1][s], power[2][s]);
         field.leaf_moments = (tree.leaf_base()..tree.node_end())
             .into_par_iter()
             .with_min_len(256)
@@ -317,6 +333,11 @@ impl GradientField {
                     count: slots.len() as u32,
                     ..LeafMoments::default()
                 };
+                let (mut sum, mut first, mut second) = (
+                    glam::DVec3::ZERO,
+                    [glam::DVec3::ZERO; 3],
+                    [glam::DVec3::ZERO; 6],
+                );
                 for s in slots {
                     let u = (tree.point(s) - centre).as_dvec3();
                     let (p, u2) = (channel[s] as f64, u.length_squared());
@@ -326,7 +347,21 @@ impl GradientField {
                     m.phi2.0 += p * p;
                     m.phi2.1 += u * (p * p);
                     m.phi2.2 += u2 * p * p;
+                    let rgb = field_power(s).as_dvec3();
+                    sum += rgb;
+                    for (f, uj) in first.iter_mut().zip(u.to_array()) {
+                        *f += rgb * uj;
+                    }
+                    let pairs = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+                    for (acc, (i, j)) in second.iter_mut().zip(pairs) {
+                        *acc += rgb * (u[i] * u[j]);
+                    }
                 }
+                m.power = PowerMoments {
+                    sum: sum.as_vec3(),
+                    first: first.map(|v| v.as_vec3()),
+                    second: second.map(|v| v.as_vec3()),
+                };
                 m
             })
             .collect();
@@ -465,6 +500,7 @@ mod tests {
         let bare = map.bytes_per_photon();
         map.set_gradients(&vec![Vec3::X; map.len()], 1.0);
         let with = map.bytes_per_photon();
+        eprintln!("bytes per photon: {bare} bare, {with} with the field");
         assert!(
             bare < 25.0 && with <= 90.0 && with - bare >= 48.0,
             "{bare} {with}"

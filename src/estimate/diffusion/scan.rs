@@ -1,7 +1,7 @@
 //! The diffusion estimate's leaf scans: the analysis sums (the structure tensor over the
 //! gradient sites within `ρ`, the isotropic Epanechnikov sums over the photons within `r`) and
 //! the anisotropic kernel's sum, over runs of kd-tree leaves whose photons lie on the query's
-//! surface, four f32 lanes at a time over the [`GradientField`]'s columns. Leaves wholly inside
+//! surface, eight f32 lanes at a time over the [`GradientField`]'s columns. Leaves wholly inside
 //! a disc add their moments; leaves that miss the kernel's ellipsoid are skipped. Owns the
 //! loops; must not decide the kernel's shape (the estimate in [`super`] does).
 
@@ -11,6 +11,7 @@ use super::tensor;
 use crate::photon::PhotonMap;
 use crate::photon::map::{GradientField, LeafMoments};
 use glam::{DVec3, Vec3};
+use multiversion::multiversion;
 
 /// The squared radii of one query's scans, and their inverses, in f32 for the leaf loops.
 pub(super) struct ScanRadii {
@@ -37,7 +38,7 @@ pub(super) struct AnalysisSums {
 impl AnalysisSums {
     /// Adds a run of leaves whose photons all agree with the query's normal: its sites (every
     /// photon, but where sites are thinned: then each stands for its weight's worth) to the
-    /// structure tensor, its photons to the isotropic sums, four lanes at a time over the
+    /// structure tensor, its photons to the isotropic sums, eight lanes at a time over the
     /// field's arrays (f32 within a run, f64 across runs, all in the field's scaled units).
     #[inline]
     pub fn scan_run(
@@ -82,7 +83,7 @@ impl AnalysisSums {
         self.inside += m.count as f64;
     }
 
-    /// The isotropic sums over the photons of `slots` within `r`, four lanes at a time.
+    /// The isotropic sums over the photons of `slots` within `r`, eight lanes at a time.
     #[inline]
     fn scan_isotropic(
         &mut self,
@@ -100,34 +101,27 @@ impl AnalysisSums {
             }
             return;
         };
-        let n = slots.len();
         let s = slots.start..end;
-        let (xs, ys, zs) = (
-            four(&xs[s.clone()]),
-            four(&ys[s.clone()]),
-            four(&zs[s.clone()]),
+        let columns = [
+            groups(&xs[s.clone()]),
+            groups(&ys[s.clone()]),
+            groups(&zs[s.clone()]),
+        ];
+        let (iso, second, inside) = isotropic_lanes(
+            columns,
+            groups(&phi[s]),
+            slots.len(),
+            q,
+            radii.r2,
+            radii.inv_r2,
         );
-        let phi = four(&phi[s]);
-        let (mut iso, mut second, mut inside) = ([0.0f32; LANES], [0.0f32; LANES], [0u32; LANES]);
-        for c in 0..xs.len() {
-            let (x4, y4, z4, p4) = (xs[c], ys[c], zs[c], phi[c]);
-            for lane in 0..LANES {
-                let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
-                let d2 = dx * dx + dy * dy + dz * dz;
-                let within = (c * LANES + lane < n) & (d2 < radii.r2);
-                let ep = masked(1.0 - d2 * radii.inv_r2, within) * p4[lane];
-                iso[lane] += ep;
-                second[lane] += ep * p4[lane];
-                inside[lane] += u32::from(within);
-            }
-        }
         self.isotropic += total(iso);
         self.second_moment += total(second);
         self.inside += inside.iter().sum::<u32>() as f64;
     }
 
     /// Adds the sites `sites` (indices into the field's site arrays) within `ρ` to the
-    /// structure tensor, four lanes at a time.
+    /// structure tensor, eight lanes at a time.
     #[inline]
     fn scan_sites(
         &mut self,
@@ -144,41 +138,28 @@ impl AnalysisSums {
             }
             return;
         };
-        let n = sites.len();
         let s = sites.start..end;
         let [gx, gy, gz] = columns.gradient;
-        let (xs, ys, zs) = (
-            four(&xs[s.clone()]),
-            four(&ys[s.clone()]),
-            four(&zs[s.clone()]),
+        let position = [
+            groups(&xs[s.clone()]),
+            groups(&ys[s.clone()]),
+            groups(&zs[s.clone()]),
+        ];
+        let gradient = [
+            groups(&gx[s.clone()]),
+            groups(&gy[s.clone()]),
+            groups(&gz[s.clone()]),
+        ];
+        let weight = groups(&columns.weight[s]);
+        let (t, tw) = structure_lanes(
+            position,
+            gradient,
+            weight,
+            sites.len(),
+            q,
+            radii.rho2,
+            radii.inv_rho2,
         );
-        let (gx, gy, gz) = (
-            four(&gx[s.clone()]),
-            four(&gy[s.clone()]),
-            four(&gz[s.clone()]),
-        );
-        let gw = four(&columns.weight[s]);
-        let mut t = [[0.0f32; LANES]; 6];
-        let mut tw = [0.0f32; LANES];
-        for c in 0..xs.len() {
-            let (x4, y4, z4) = (xs[c], ys[c], zs[c]);
-            let (gx4, gy4, gz4, gw4) = (gx[c], gy[c], gz[c], gw[c]);
-            for lane in 0..LANES {
-                let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
-                let d2 = dx * dx + dy * dy + dz * dz;
-                let keep = (c * LANES + lane < n) & (d2 < radii.rho2);
-                let w = masked((1.0 - d2 * radii.inv_rho2) * gw4[lane], keep);
-                let (x, y, z) = (gx4[lane], gy4[lane], gz4[lane]);
-                let (wx, wy) = (w * x, w * y);
-                t[0][lane] += wx * x;
-                t[1][lane] += wx * y;
-                t[2][lane] += wx * z;
-                t[3][lane] += wy * y;
-                t[4][lane] += wy * z;
-                t[5][lane] += w * z * z;
-                tw[lane] += w;
-            }
-        }
         for (acc, v) in self.structure.iter_mut().zip(t) {
             *acc += total(v);
         }
@@ -305,20 +286,115 @@ impl LeafRun {
 
 /// The sum of a lane accumulator's lanes, in f64.
 #[inline(always)]
-fn total(a: [f32; LANES]) -> f64 {
-    ((a[0] + a[1]) + (a[2] + a[3])) as f64
+fn total(a: Lanes) -> f64 {
+    (((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))) as f64
 }
 
 /// A leaf is wholly inside a disc when its box's far corner is inside by this relative margin
 /// (so that no photon rounds to the rim's other side).
 const INSIDE_MARGIN: f32 = 1.0 - 1e-5;
 
-/// Lanes of the leaf scans: four f32, one SSE register.
-const LANES: usize = 4;
+/// Lanes of the leaf scans: eight f32, one AVX register (two SSE ones where there is no AVX2:
+/// the same arithmetic lane by lane, so the same sums bit for bit on every machine).
+const LANES: usize = 8;
+
+type Lanes = [f32; LANES];
+
+/// The isotropic scan's lanes over the first `n` photons of whole lane groups: the sums of
+/// `(1 − d²/r²) φ` and `(1 − d²/r²) φ²` over the photons within `r`, and their count.
+#[multiversion(targets("x86_64+avx+avx2"))]
+fn isotropic_lanes(
+    [xs, ys, zs]: [&[Lanes]; 3],
+    phi: &[Lanes],
+    n: usize,
+    q: Vec3,
+    r2: f32,
+    inv_r2: f32,
+) -> (Lanes, Lanes, [u32; LANES]) {
+    let (mut iso, mut second, mut inside) = ([0.0f32; LANES], [0.0f32; LANES], [0u32; LANES]);
+    for c in 0..xs.len() {
+        let (x4, y4, z4, p4) = (xs[c], ys[c], zs[c], phi[c]);
+        for lane in 0..LANES {
+            let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let within = (c * LANES + lane < n) & (d2 < r2);
+            let ep = masked(1.0 - d2 * inv_r2, within) * p4[lane];
+            iso[lane] += ep;
+            second[lane] += ep * p4[lane];
+            inside[lane] += u32::from(within);
+        }
+    }
+    (iso, second, inside)
+}
+
+/// The structure tensor's lanes over the first `n` sites of whole lane groups: the sums of
+/// `(1 − d²/ρ²) w g gᵀ` (xx, xy, xz, yy, yz, zz) and of the weights, over the sites within `ρ`.
+#[multiversion(targets("x86_64+avx+avx2"))]
+fn structure_lanes(
+    [xs, ys, zs]: [&[Lanes]; 3],
+    [gx, gy, gz]: [&[Lanes]; 3],
+    gw: &[Lanes],
+    n: usize,
+    q: Vec3,
+    rho2: f32,
+    inv_rho2: f32,
+) -> ([Lanes; 6], Lanes) {
+    let mut t = [[0.0f32; LANES]; 6];
+    let mut tw = [0.0f32; LANES];
+    for c in 0..xs.len() {
+        let (x4, y4, z4) = (xs[c], ys[c], zs[c]);
+        let (gx4, gy4, gz4, gw4) = (gx[c], gy[c], gz[c], gw[c]);
+        for lane in 0..LANES {
+            let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let keep = (c * LANES + lane < n) & (d2 < rho2);
+            let w = masked((1.0 - d2 * inv_rho2) * gw4[lane], keep);
+            let (x, y, z) = (gx4[lane], gy4[lane], gz4[lane]);
+            let (wx, wy) = (w * x, w * y);
+            t[0][lane] += wx * x;
+            t[1][lane] += wx * y;
+            t[2][lane] += wx * z;
+            t[3][lane] += wy * y;
+            t[4][lane] += wy * z;
+            t[5][lane] += w * z * z;
+            tw[lane] += w;
+        }
+    }
+    (t, tw)
+}
+
+/// The anisotropic kernel's lanes over the first `n` photons of whole lane groups: the sums of
+/// `(1 − y) Φ` (r, g, b) over the photons with `y = Σ (a_i·d)² < 1`.
+#[multiversion(targets("x86_64+avx+avx2"))]
+fn ellipse_lanes(
+    [xs, ys, zs]: [&[Lanes]; 3],
+    [pr, pg, pb]: [&[Lanes]; 3],
+    n: usize,
+    q: Vec3,
+    [a1, a2, a3]: [Vec3; 3],
+) -> [Lanes; 3] {
+    let (mut r, mut g, mut b) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+    for c in 0..xs.len() {
+        let (x4, y4, z4) = (xs[c], ys[c], zs[c]);
+        let (pr4, pg4, pb4) = (pr[c], pg[c], pb[c]);
+        for lane in 0..LANES {
+            let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
+            let u = dx * a1.x + dy * a1.y + dz * a1.z;
+            let v = dx * a2.x + dy * a2.y + dz * a2.z;
+            let w = dx * a3.x + dy * a3.y + dz * a3.z;
+            let y = u * u + v * v + w * w;
+            let k = masked(1.0 - y, (c * LANES + lane < n) & (y < 1.0));
+            r[lane] += k * pr4[lane];
+            g[lane] += k * pg4[lane];
+            b[lane] += k * pb4[lane];
+        }
+    }
+    [r, g, b]
+}
 
 /// A run rounded to whole lane groups (see [`lane_end`]) as groups.
 #[inline(always)]
-fn four(a: &[f32]) -> &[[f32; LANES]] {
+fn groups(a: &[f32]) -> &[Lanes] {
     a.as_chunks::<LANES>().0
 }
 
@@ -342,23 +418,43 @@ fn masked(v: f32, keep: bool) -> f32 {
 pub(super) struct EllipseScan {
     a: [Vec3; 3],
     q: Vec3,
+    /// The quadratic form `M = Σ a_i a_iᵀ` (xx, xy, xz, yy, yz, zz), for leaf moments.
+    m: [f64; 6],
+}
+
+/// Where a leaf's box lies against the kernel's ellipsoid.
+enum BoxPlace {
+    Outside,
+    Inside,
+    Across,
 }
 
 impl EllipseScan {
     pub fn new(metric: &tensor::ScaledMetric, q: Vec3) -> Self {
+        let [a1, a2, a3] = metric.axes();
+        let m = |i: usize, j: usize| a1[i] * a1[j] + a2[i] * a2[j] + a3[i] * a3[j];
         Self {
-            a: metric.axes().map(|a| a.as_vec3()),
+            a: [a1, a2, a3].map(|a| a.as_vec3()),
             q,
+            m: [m(0, 0), m(0, 1), m(0, 2), m(1, 1), m(1, 2), m(2, 2)],
         }
     }
 
-    /// `Σ (1 − y) Φ` over a run of leaves, skipping the leaves whose box lies outside the
-    /// ellipsoid's bounding slab on some axis (most of them where the kernel is squeezed),
-    /// scanning the others, runs of neighbouring ones together.
+    /// `Σ (1 − y) Φ` over a run of leaves: the leaves whose box lies outside the ellipsoid's
+    /// bounding slab on some axis (most of them where the kernel is squeezed) are skipped,
+    /// those wholly inside it (most of them where it is round) add their moments, and the
+    /// others are scanned, runs of neighbouring ones together.
     pub fn run(&self, tree: &crate::photon::KdTree, field: &GradientField, run: &LeafRun) -> DVec3 {
         let mut sum = DVec3::ZERO;
         run.parts(field, |part| match part {
-            Part::Leaf(m) => self.misses(m.lower, m.upper),
+            Part::Leaf(m) => match self.place(m.lower, m.upper) {
+                BoxPlace::Outside => true,
+                BoxPlace::Inside => {
+                    sum += self.moments(m);
+                    true
+                }
+                BoxPlace::Across => false,
+            },
             Part::Slots(slots) => {
                 sum += self.sum(tree, field, slots);
                 true
@@ -367,18 +463,51 @@ impl EllipseScan {
         sum
     }
 
-    /// Whether the box misses the ellipsoid: on some axis `a_i` the box's projection lies
-    /// wholly outside [−1, 1] (with a margin on the safe side, so no photon inside is lost).
+    /// Where the box lies: outside if on some axis `a_i` its projection lies wholly outside
+    /// [−1, 1], inside if the projections' far ends bound `y` below 1 (each with a margin on
+    /// the safe side, so that no photon is lost or counted twice by rounding).
     #[inline]
-    fn misses(&self, lower: Vec3, upper: Vec3) -> bool {
+    fn place(&self, lower: Vec3, upper: Vec3) -> BoxPlace {
         let centre = (lower + upper) * 0.5 - self.q;
         let half = (upper - lower) * 0.5;
-        self.a
-            .iter()
-            .any(|a| centre.dot(*a).abs() - half.dot(a.abs()) > 1.0 + 1e-4)
+        let mut far = 0.0;
+        for a in &self.a {
+            let (mid, reach) = (centre.dot(*a).abs(), half.dot(a.abs()));
+            if mid - reach > 1.0 + 1e-4 {
+                return BoxPlace::Outside;
+            }
+            far += (mid + reach) * (mid + reach);
+        }
+        if far < INSIDE_MARGIN {
+            BoxPlace::Inside
+        } else {
+            BoxPlace::Across
+        }
     }
 
-    /// `Σ (1 − y) Φ` over the run's photons with `y = dᵀD⁻¹d/r² < 1`, four lanes at a time.
+    /// `Σ (1 − y) Φ` over a leaf wholly inside the ellipsoid, from its moments about its
+    /// centre `c`: with `e = c − q`, `y = eᵀMe + 2 (Me)·u + uᵀMu`.
+    #[inline]
+    fn moments(&self, leaf: &LeafMoments) -> DVec3 {
+        let m = &self.m;
+        let e = (leaf.centre - self.q).as_dvec3();
+        let me = DVec3::new(
+            m[0] * e.x + m[1] * e.y + m[2] * e.z,
+            m[1] * e.x + m[3] * e.y + m[4] * e.z,
+            m[2] * e.x + m[4] * e.y + m[5] * e.z,
+        );
+        let p = &leaf.power;
+        let first = p.first.map(|v| v.as_dvec3());
+        let second = p.second.map(|v| v.as_dvec3());
+        p.sum.as_dvec3() * (1.0 - e.dot(me))
+            - 2.0 * (first[0] * me.x + first[1] * me.y + first[2] * me.z)
+            - (second[0] * m[0]
+                + 2.0 * (second[1] * m[1] + second[2] * m[2] + second[4] * m[4])
+                + second[3] * m[3]
+                + second[5] * m[5])
+    }
+
+    /// `Σ (1 − y) Φ` over the run's photons with `y = dᵀD⁻¹d/r² < 1`, eight lanes at a time.
     #[inline]
     fn sum(
         &self,
@@ -397,30 +526,18 @@ impl EllipseScan {
             }
             return sum;
         };
-        let n = slots.len();
         let s = slots.start..end;
-        let (xs, ys, zs) = (&xs[s.clone()], &ys[s.clone()], &zs[s.clone()]);
-        let (pr, pg, pb) = (&pr[s.clone()], &pg[s.clone()], &pb[s.clone()]);
-        let [a1, a2, a3] = self.a;
-        let q = self.q;
-        let (mut r, mut g, mut b) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
-        let (xs, ys, zs) = (four(xs), four(ys), four(zs));
-        let (pr, pg, pb) = (four(pr), four(pg), four(pb));
-        for c in 0..xs.len() {
-            let (x4, y4, z4) = (xs[c], ys[c], zs[c]);
-            let (pr4, pg4, pb4) = (pr[c], pg[c], pb[c]);
-            for lane in 0..LANES {
-                let (dx, dy, dz) = (x4[lane] - q.x, y4[lane] - q.y, z4[lane] - q.z);
-                let u = dx * a1.x + dy * a1.y + dz * a1.z;
-                let v = dx * a2.x + dy * a2.y + dz * a2.z;
-                let w = dx * a3.x + dy * a3.y + dz * a3.z;
-                let y = u * u + v * v + w * w;
-                let k = masked(1.0 - y, (c * LANES + lane < n) & (y < 1.0));
-                r[lane] += k * pr4[lane];
-                g[lane] += k * pg4[lane];
-                b[lane] += k * pb4[lane];
-            }
-        }
+        let position = [
+            groups(&xs[s.clone()]),
+            groups(&ys[s.clone()]),
+            groups(&zs[s.clone()]),
+        ];
+        let power = [
+            groups(&pr[s.clone()]),
+            groups(&pg[s.clone()]),
+            groups(&pb[s]),
+        ];
+        let [r, g, b] = ellipse_lanes(position, power, slots.len(), self.q, self.a);
         DVec3::new(total(r), total(g), total(b))
     }
 
