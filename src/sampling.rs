@@ -28,6 +28,8 @@ pub enum Stream {
     Distribution = 4,
     /// Keys of the pixels' Owen-scrambled Sobol sequences for light and gather samples.
     EyeSequences = 5,
+    /// Emission samples of a pixel (`render::emission`): their Sobol scrambles and PCG streams.
+    EmissionSamples = 6,
 }
 
 /// The seed of pass `pass` of a progressive run. Pass 0 keeps the run's own seed, so a one-pass

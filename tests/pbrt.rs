@@ -270,6 +270,9 @@ fn render_pbrt(text: &str) -> (pipeline::RenderOutcome, scene::SceneDescription)
         path_str(&out),
         "--threads",
         "2",
+        // Pixels are checked at their camera sample: emitters and sky not sampled apart.
+        "--emission-samples",
+        "0",
     ]))
     .unwrap_or_else(|e| panic!("{e}"));
     (outcome, scene::load(&path).unwrap())

@@ -116,7 +116,11 @@ fn diffuse_plane_under_the_environment_has_irradiance_pi_l() {
     let light = "[[lights]]\ntype = \"environment\"\nradiance = [0.5, 0.25, 1.0]";
     for samples in ["1", "16"] {
         let (outcome, desc) =
-            render_scene(&plane_scene(light, 64, 48), &["--light-samples", samples]);
+            // Each pixel checked at its camera sample: the sky is not sampled apart.
+            render_scene(
+                &plane_scene(light, 64, 48),
+                &["--light-samples", samples, "--emission-samples", "0"],
+            );
         assert!(outcome.caustic.is_none() && outcome.global.is_none());
         let check = check_plane_pixels(
             &outcome.image,
@@ -181,7 +185,8 @@ fn irradiance_under_a_mesh_emitter_matches_the_rectangle_and_the_quad_light() {
     let quad = "[[lights]]\ntype = \"quad\"\ncorner = [-1.0, 1.0, -1.0]\nedge_u = [2.0, 0.0, 0.0]\n\
                 edge_v = [0.0, 0.0, 2.0]\npower = [40.0, 40.0, 40.0]";
     let radiance = 40.0 / (PI * 4.0);
-    let samples = ["--light-samples", "256"];
+    // Pixels checked at their camera sample: the emitter they see is not sampled apart.
+    let samples = ["--light-samples", "256", "--emission-samples", "0"];
     let mut means = Vec::new();
     for (what, light, back) in [
         ("mesh", mesh_light(&obj, false), 0.0),
@@ -239,7 +244,9 @@ fn a_visible_mesh_emitter_shows_power_over_pi_area() {
             .replace("look_at = [0.0, 0.0, 0.0]", "look_at = [0.3, 1.0, 0.2]")
             .replace("up = [0.0, 1.0, 0.0]", "up = [0.0, 0.0, 1.0]")
             .replace("fov_y = 45.0", "fov_y = 120.0");
-        let (outcome, _) = render_scene(&text, &[]);
+        // Whole pixels, lit or dark, from one camera sample each (the emitter's edge pixels
+        // would mix both under emission samples).
+        let (outcome, _) = render_scene(&text, &["--emission-samples", "0"]);
         let sides = if two_sided { 2.0 } else { 1.0 };
         let want = 40.0 / (sides * PI * 4.0);
         let (mut lit, mut dark) = (0, 0);

@@ -146,6 +146,15 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_GLASS_SPLIT_DEPTH)]
     pub glass_split_depth: u32,
 
+    /// Samples per pass of the light seen along mirror and glass chains (the lights, their
+    /// images in glass and mirrors, the environment), in each pixel where one of a 3×3 grid
+    /// of pilot rays meets a light, mirror or glass first; those pixels' camera samples leave
+    /// that light out. A light's image through glass is often smaller than a pixel, and a
+    /// camera sample's rare hit of it is the largest error of a few passes: these samples
+    /// are rays only, so many cost little. 0: camera samples count it themselves
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_EMISSION_SAMPLES)]
+    pub emission_samples: u32,
+
     /// Caustic radiance estimate.
     #[command(flatten)]
     pub estimate: EstimatorFlags,
@@ -204,3 +213,7 @@ pub const DEFAULT_CAUSTIC_PHOTONS: usize = 100_000;
 pub const DEFAULT_GLOBAL_PHOTONS: usize = 200_000;
 /// Glass hits that split an eye path by default (README, "Whole scenes").
 pub const DEFAULT_GLASS_SPLIT_DEPTH: u32 = 1000;
+/// Emission samples per flagged pixel and pass by default (README, "Choosing the defaults").
+pub const DEFAULT_EMISSION_SAMPLES: u32 = 16;
+/// Most emission samples a pixel may take per pass (more is a typo, not a setting).
+pub const MAX_EMISSION_SAMPLES: u32 = 65_536;

@@ -98,6 +98,20 @@ impl PassSamples {
         self.spp
     }
 
+    /// Emission sample `j` of `count` of pixel `pixel` in this pass: its position inside the
+    /// pixel, from the pixel's own scrambled Sobol sequence (index `pass · count + j`, so
+    /// passes keep stratifying it), and the stream for its glass choices.
+    pub fn emission_sample(&self, pixel: u64, j: u32, count: u32) -> ((f32, f32), Rng) {
+        let index = self.pass * count as u64 + j as u64;
+        let scramble = StreamSeed::new(self.seed, Stream::EmissionSamples)
+            .rng(pixel ^ (index / SOBOL_BLOCK).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+            .next_u32();
+        let [x, y, _, _] = sobol_burley::sample_4d((index % SOBOL_BLOCK) as u32, 0, scramble);
+        let rng = StreamSeed::new(pass_seed(self.seed, self.pass), Stream::EmissionSamples)
+            .rng(pixel * count as u64 + j as u64);
+        ((x, y), rng)
+    }
+
     /// Sample `s` (< spp) of pixel `pixel` (row-major index) in this pass.
     pub fn sample(&self, pixel: u64, s: u32) -> CameraSample {
         let index = self.pass * self.spp as u64 + s as u64;

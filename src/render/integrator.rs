@@ -110,6 +110,15 @@ pub struct Integrator<'a> {
 /// Specular bounces a gather ray follows before giving up.
 const GATHER_SPECULAR_DEPTH: u32 = 4;
 
+/// Whether a camera path counts the light it sees along its specular chain itself: the
+/// emitters and the environment it meets before any diffuse surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Emission {
+    Counted,
+    /// Left to [`Integrator::emitted`]'s own samples of the pixel (see `render::emission`).
+    Elsewhere,
+}
+
 impl Integrator<'_> {
     /// Radiance arriving at `origin` from direction `-dir` (unit `dir`).
     pub fn radiance(
@@ -120,19 +129,35 @@ impl Integrator<'_> {
         sampler: &mut PathSampler,
         scratch: &mut Scratch,
     ) -> Radiance {
+        self.trace(origin, dir, depth, Emission::Counted, sampler, scratch)
+    }
+
+    /// [`Integrator::radiance`], counting the emitters and environment seen along the
+    /// specular chain or not.
+    pub fn trace(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        depth: u32,
+        emission: Emission,
+        sampler: &mut PathSampler,
+        scratch: &mut Scratch,
+    ) -> Radiance {
+        let counted = |e: Vec3| Radiance {
+            direct: if emission == Emission::Counted {
+                e
+            } else {
+                Vec3::ZERO
+            },
+            ..Radiance::default()
+        };
         let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-            return Radiance {
-                direct: self.world.background(),
-                ..Radiance::default()
-            };
+            return counted(self.world.background());
         };
         let m = match hit.surface {
             Surface::Light(l) => {
                 let light = &self.world.light_sources[l];
-                return Radiance {
-                    direct: light.emitted_radiance(-dir.dot(hit.geometric_normal)),
-                    ..Radiance::default()
-                };
+                return counted(light.emitted_radiance(-dir.dot(hit.geometric_normal)));
             }
             Surface::Material(m) => m,
         };
@@ -159,10 +184,11 @@ impl Integrator<'_> {
             Material::Mirror { tint } if depth < self.max_depth => {
                 let r = reflect(dir, ns);
                 *tint
-                    * self.radiance(
+                    * self.trace(
                         self.spawn(hit.position, ng, r),
                         r,
                         depth + 1,
+                        emission,
                         sampler,
                         scratch,
                     )
@@ -185,28 +211,31 @@ impl Integrator<'_> {
                         _ => (r, reflect_tint),
                     };
                     return *tint
-                        * self.radiance(
+                        * self.trace(
                             self.spawn(hit.position, ng, next),
                             next,
                             depth + 1,
+                            emission,
                             sampler,
                             scratch,
                         );
                 }
                 let mut l = (f * *reflect_tint)
-                    * self.radiance(
+                    * self.trace(
                         self.spawn(hit.position, ng, r),
                         r,
                         depth + 1,
+                        emission,
                         sampler,
                         scratch,
                     );
                 if let Some(t) = refract(dir, ns, eta).filter(|_| f < 1.0) {
                     l += ((1.0 - f) * *transmit_tint)
-                        * self.radiance(
+                        * self.trace(
                             self.spawn(hit.position, ng, t),
                             t,
                             depth + 1,
+                            emission,
                             sampler,
                             scratch,
                         );
@@ -214,6 +243,62 @@ impl Integrator<'_> {
                 l
             }
             _ => Radiance::default(),
+        }
+    }
+
+    /// The emitted radiance (emitters and environment) seen from `origin` along `dir` through
+    /// mirrors and glass, nothing past a diffuse surface: the part of [`Integrator::radiance`]
+    /// that [`Emission::Elsewhere`] leaves out, glass split or sampled the same way. Cheap
+    /// beside a full camera sample (rays only, no estimates), so a pixel can take many to
+    /// resolve a light's image smaller than itself.
+    pub fn emitted(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        depth: u32,
+        rng: &mut crate::sampling::Rng,
+    ) -> Vec3 {
+        let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
+            return self.world.background();
+        };
+        let m = match hit.surface {
+            Surface::Light(l) => {
+                let light = &self.world.light_sources[l];
+                return light.emitted_radiance(-dir.dot(hit.geometric_normal));
+            }
+            Surface::Material(m) => m,
+        };
+        if depth >= self.max_depth {
+            return Vec3::ZERO;
+        }
+        let (ng, ns) = hit.facing(dir);
+        let follow = |d: Vec3, rng: &mut crate::sampling::Rng| {
+            self.emitted(self.spawn(hit.position, ng, d), d, depth + 1, rng)
+        };
+        match self.world.material(m) {
+            Material::Diffuse { .. } => Vec3::ZERO,
+            Material::Mirror { tint } => *tint * follow(reflect(dir, ns), rng),
+            Material::Glass {
+                ior,
+                reflect_tint,
+                transmit_tint,
+            } => {
+                let eta = if hit.entering(dir) { 1.0 / ior } else { *ior };
+                let f = fresnel_dielectric(-dir.dot(ns), eta);
+                let r = reflect(dir, ns);
+                let refracted = refract(dir, ns, eta).filter(|_| f < 1.0);
+                if depth >= self.glass_split_depth {
+                    return match refracted {
+                        Some(t) if rng.next_f32() >= f => *transmit_tint * follow(t, rng),
+                        _ => *reflect_tint * follow(r, rng),
+                    };
+                }
+                let mut l = f * *reflect_tint * follow(r, rng);
+                if let Some(t) = refracted {
+                    l += (1.0 - f) * *transmit_tint * follow(t, rng);
+                }
+                l
+            }
         }
     }
 

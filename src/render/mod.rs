@@ -1,7 +1,8 @@
 //! The render stage, shaped as a pass loop. A render is a sequence of independent passes
 //! ([`schedule`] says what pass `i` draws and at which radii); each pass ([`pass`]) traces its
 //! own photon maps, prepares its estimates, shades fresh camera samples ([`camera`]) through
-//! the [`integrator`] and drops its maps; the [`film`] accumulates the passes' images and is
+//! the [`integrator`], with the light seen along mirror and glass chains sampled apart in
+//! the pixels that need it ([`emission`]) and drops its maps; the [`film`] accumulates the passes' images and is
 //! what gets written ([`output`], [`film_file`]) and merged ([`merge`]). [`pipeline`] is the
 //! command line around that loop, with its up-front memory check ([`memory_budget`]) and pass 0's
 //! photon map files ([`photon_files`]). Owns
@@ -9,6 +10,7 @@
 
 pub mod args;
 pub mod camera;
+pub mod emission;
 pub mod film;
 pub mod film_file;
 pub mod integrator;

@@ -17,7 +17,9 @@
 //! estimate of the whole image on its own and the film averages passes with equal weights.
 
 use super::camera::{PassSamples, PinholeCamera};
+use super::emission::{EmissionPixels, emitted_mean};
 use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
+use super::integrator::Emission;
 use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
 use super::schedule::{Schedule, fixed_radius, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
@@ -62,6 +64,11 @@ pub struct RenderSettings {
     /// ones follow one, chosen by the Fresnel reflectance.
     #[serde(default = "split_everywhere")]
     pub glass_split_depth: u32,
+    /// Samples of the light seen along mirror and glass chains per pass in each pixel that
+    /// sees a light, mirror or glass first (`render::emission`); 0: camera samples count it.
+    /// Films written before it existed counted it in their camera samples.
+    #[serde(default)]
+    pub emission_samples: u32,
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
     pub estimator: EstimatorSettings,
@@ -131,7 +138,9 @@ pub struct PassMaps {
 pub fn wanted_maps(settings: &RenderSettings, world: &World) -> Vec<crate::photon::store::MapInfo> {
     use crate::photon::store::MapInfo;
     let mut wanted = Vec::new();
-    if world.has_specular() && settings.caustic_photons > 0 {
+    // Without a diffuse surface no caustic photon is ever stored: tracing would only run
+    // to its path limit.
+    if world.has_specular() && world.has_diffuse() && settings.caustic_photons > 0 {
         wanted.push(MapInfo {
             kind: MapKind::Caustic,
             target: settings.caustic_photons as u64,
@@ -199,6 +208,8 @@ pub struct PassContext<'a> {
     pub schedule: Schedule,
     /// Whether to fill the kernel-field channels (diffusion estimate only).
     pub kernel_field: bool,
+    /// The pixels that sample their emitted light apart (found once per render).
+    pub emission: &'a EmissionPixels,
 }
 
 impl PassContext<'_> {
@@ -330,6 +341,7 @@ impl PassContext<'_> {
             &self.camera,
             &integrator,
             &samples,
+            Some(self.emission),
             probe.as_ref(),
             self.channels(),
             &bar,
@@ -339,7 +351,11 @@ impl PassContext<'_> {
         times.accumulate(
             "render",
             start.elapsed(),
-            &[("pixels", pixels), ("spp", self.settings.spp as u64)],
+            &[
+                ("pixels", pixels),
+                ("spp", self.settings.spp as u64),
+                ("emission pixels", self.emission.count() as u64),
+            ],
         );
         if crate::interrupt::requested() {
             return Ok(None);
@@ -400,6 +416,7 @@ pub fn shade_pass(
     camera: &PinholeCamera,
     integrator: &Integrator,
     samples: &PassSamples,
+    emission: Option<&EmissionPixels>,
     probe: Option<&KernelProbe>,
     channels: usize,
     progress: &ProgressBar,
@@ -419,15 +436,29 @@ pub fn shade_pass(
                     return;
                 }
                 let pixel = (y * w + x) as u64;
+                let apart = emission.filter(|e| e.flagged(pixel as usize));
+                let counted = if apart.is_some() {
+                    Emission::Elsewhere
+                } else {
+                    Emission::Counted
+                };
                 let mut sum = Radiance::default();
                 for s in 0..spp {
                     let sample = samples.sample(pixel, s);
                     let (jx, jy) = sample.jitter;
                     let d = camera.direction(x as f32 + jx, y as f32 + jy);
                     let mut sampler = PathSampler::new(sample.rng, Some(sample.sequence));
-                    sum += integrator.radiance(camera.origin(), d, 0, &mut sampler, scratch);
+                    sum += integrator.trace(camera.origin(), d, 0, counted, &mut sampler, scratch);
                 }
-                let mean = (1.0 / spp.max(1) as f32) * sum;
+                let mut mean = (1.0 / spp.max(1) as f32) * sum;
+                if let Some(e) = apart {
+                    let n = e.samples();
+                    let at = (0..n).map(|j| {
+                        let ((jx, jy), rng) = samples.emission_sample(pixel, j, n);
+                        ((x as f32 + jx, y as f32 + jy), rng)
+                    });
+                    mean.direct += emitted_mean(camera, integrator, at);
+                }
                 for (i, v) in [mean.total(), mean.direct, mean.caustic, mean.indirect]
                     .iter()
                     .enumerate()

@@ -10,10 +10,12 @@
 //! runs. Ctrl-C ends the current pass unfinished and writes the film of the complete ones.
 
 pub use super::args::{
-    DEFAULT_CAUSTIC_PHOTONS, DEFAULT_GLASS_SPLIT_DEPTH, DEFAULT_GLOBAL_PHOTONS, DEFAULT_PASSES,
-    MAX_IRRADIANCE_STRIDE, MAX_LIGHT_SAMPLES, RenderArgs, parse_resolution,
+    DEFAULT_CAUSTIC_PHOTONS, DEFAULT_EMISSION_SAMPLES, DEFAULT_GLASS_SPLIT_DEPTH,
+    DEFAULT_GLOBAL_PHOTONS, DEFAULT_PASSES, MAX_EMISSION_SAMPLES, MAX_IRRADIANCE_STRIDE,
+    MAX_LIGHT_SAMPLES, RenderArgs, parse_resolution,
 };
 use super::camera::PinholeCamera;
+use super::emission::EmissionPixels;
 use super::film::{Film, FilmHeader};
 use super::film_file::{self, FilmFileError};
 use super::memory_budget::check_memory;
@@ -146,6 +148,12 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
             args.light_samples
         ));
     }
+    if args.emission_samples > MAX_EMISSION_SAMPLES {
+        return invalid(format!(
+            "--emission-samples {}: must be from 0 (off) to {MAX_EMISSION_SAMPLES}",
+            args.emission_samples
+        ));
+    }
     if args.irradiance_stride > MAX_IRRADIANCE_STRIDE {
         return invalid(format!(
             "--irradiance-stride {}: must be from 0 (off) to {MAX_IRRADIANCE_STRIDE}",
@@ -263,6 +271,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         irradiance_stride: args.irradiance_stride,
         light_samples: args.light_samples,
         glass_split_depth: args.glass_split_depth,
+        emission_samples: args.emission_samples,
         alpha: args.ppm_alpha,
         estimator: args.estimate.settings(),
     }
@@ -357,6 +366,16 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         None => progress(last - first, "passes"),
     };
     let pinhole = PinholeCamera::new(camera);
+    let found = times.time("emission pixels", || {
+        EmissionPixels::find(&pinhole, &world, settings.emission_samples)
+    });
+    let Some(emission) = found else {
+        return Err(RenderError::Interrupted {
+            output,
+            saved_photons: None,
+        });
+    };
+    times.add_counts("emission pixels", &[("pixels", emission.count() as u64)]);
     let mut records: Vec<PassRecord> = Vec::new();
     let mut last_report = None;
     let mut last_write: Option<Instant> = None;
@@ -394,6 +413,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         let context = PassContext {
             world: &world,
             camera: pinhole,
+            emission: &emission,
             settings: &settings,
             radii,
             schedule,

@@ -103,6 +103,7 @@ impl SceneTarget {
             &integrator,
             &samples,
             None,
+            None,
             12,
             &ProgressBar::hidden(),
         );

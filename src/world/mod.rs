@@ -334,6 +334,13 @@ impl World {
         !self.caustic_targets.is_empty()
     }
 
+    /// Whether any object is diffuse (so photons have somewhere to be stored).
+    pub fn has_diffuse(&self) -> bool {
+        self.surfaces.iter().any(|s| {
+            matches!(s, Surface::Material(m) if matches!(self.material(*m), Material::Diffuse { .. }))
+        })
+    }
+
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {
         self.accel.occluded(origin, dir, tnear, tfar)
     }
