@@ -3,8 +3,8 @@
 //! A light's image through glass is often far smaller than a pixel: a camera sample finds it
 //! or misses it, so a pixel's value there is a rare hit of thousands of times its mean, the
 //! error that dominates a whole image after a few passes. Here such pixels take many cheap
-//! samples of that light alone (rays only, no estimates: [`Integrator::emitted`], glass split
-//! or sampled as the camera samples do it) while
+//! samples of that light alone (a few rays each, glass sampled, no estimates:
+//! [`Integrator::emitted`]) while
 //! their camera samples leave it out ([`Emission::Elsewhere`]): the same expectation, far
 //! less variance per second. Which pixels do so is decided once per render from the
 //! geometry alone ([`EmissionPixels::find`]), so that every pass, thread count and shard
@@ -123,7 +123,7 @@ pub fn emitted_mean(
     let n = samples.len().max(1) as f32;
     let mut sum = Vec3::ZERO;
     for ((x, y), mut rng) in samples {
-        sum += integrator.emitted(camera.origin(), camera.direction(x, y), 0, &mut rng);
+        sum += integrator.emitted(camera.origin(), camera.direction(x, y), &mut rng);
     }
     sum / n
 }

@@ -248,58 +248,46 @@ impl Integrator<'_> {
 
     /// The emitted radiance (emitters and environment) seen from `origin` along `dir` through
     /// mirrors and glass, nothing past a diffuse surface: the part of [`Integrator::radiance`]
-    /// that [`Emission::Elsewhere`] leaves out, glass split or sampled the same way. Cheap
-    /// beside a full camera sample (rays only, no estimates), so a pixel can take many to
-    /// resolve a light's image smaller than itself.
-    pub fn emitted(
-        &self,
-        origin: Vec3,
-        dir: Vec3,
-        depth: u32,
-        rng: &mut crate::sampling::Rng,
-    ) -> Vec3 {
-        let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-            return self.world.background();
-        };
-        let m = match hit.surface {
-            Surface::Light(l) => {
-                let light = &self.world.light_sources[l];
-                return light.emitted_radiance(-dir.dot(hit.geometric_normal));
-            }
-            Surface::Material(m) => m,
-        };
-        if depth >= self.max_depth {
-            return Vec3::ZERO;
-        }
-        let (ng, ns) = hit.facing(dir);
-        let follow = |d: Vec3, rng: &mut crate::sampling::Rng| {
-            self.emitted(self.spawn(hit.position, ng, d), d, depth + 1, rng)
-        };
-        match self.world.material(m) {
-            Material::Diffuse { .. } => Vec3::ZERO,
-            Material::Mirror { tint } => *tint * follow(reflect(dir, ns), rng),
-            Material::Glass {
-                ior,
-                reflect_tint,
-                transmit_tint,
-            } => {
-                let eta = if hit.entering(dir) { 1.0 / ior } else { *ior };
-                let f = fresnel_dielectric(-dir.dot(ns), eta);
-                let r = reflect(dir, ns);
-                let refracted = refract(dir, ns, eta).filter(|_| f < 1.0);
-                if depth >= self.glass_split_depth {
-                    return match refracted {
-                        Some(t) if rng.next_f32() >= f => *transmit_tint * follow(t, rng),
-                        _ => *reflect_tint * follow(r, rng),
-                    };
+    /// that [`Emission::Elsewhere`] leaves out. One path, chosen at each glass hit with the
+    /// Fresnel reflectance as probability: a few rays and no estimate, where a split path
+    /// costs a tree of rays (measured on the torus knot: split, 16 samples took 2.3× the
+    /// pass time for no less error), so a pixel can take many to resolve a light's image
+    /// smaller than itself.
+    pub fn emitted(&self, mut origin: Vec3, mut dir: Vec3, rng: &mut crate::sampling::Rng) -> Vec3 {
+        let mut throughput = Vec3::ONE;
+        for _ in 0..=self.max_depth {
+            let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
+                return throughput * self.world.background();
+            };
+            let m = match hit.surface {
+                Surface::Light(l) => {
+                    let light = &self.world.light_sources[l];
+                    return throughput * light.emitted_radiance(-dir.dot(hit.geometric_normal));
                 }
-                let mut l = f * *reflect_tint * follow(r, rng);
-                if let Some(t) = refracted {
-                    l += (1.0 - f) * *transmit_tint * follow(t, rng);
+                Surface::Material(m) => m,
+            };
+            let (ng, ns) = hit.facing(dir);
+            let next = match self.world.material(m) {
+                Material::Diffuse { .. } => return Vec3::ZERO,
+                Material::Mirror { tint } => {
+                    throughput *= *tint;
+                    reflect(dir, ns)
                 }
-                l
-            }
+                Material::Glass {
+                    ior,
+                    reflect_tint,
+                    transmit_tint,
+                } => {
+                    let eta = if hit.entering(dir) { 1.0 / ior } else { *ior };
+                    let (next, branch) = scatter_dielectric(dir, ns, eta, rng.next_f32());
+                    throughput *= branch.pick(*reflect_tint, *transmit_tint);
+                    next
+                }
+            };
+            origin = self.spawn(hit.position, ng, next);
+            dir = next;
         }
+        Vec3::ZERO
     }
 
     fn offset(&self, p: Vec3, n: Vec3) -> Vec3 {
