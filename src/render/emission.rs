@@ -4,14 +4,14 @@
 //! or misses it, so a pixel's value there is a rare hit of thousands of times its mean, the
 //! error that dominates a whole image after a few passes. Here such pixels take many cheap
 //! samples of that light alone (a few rays each, glass sampled, no estimates:
-//! [`Integrator::emitted`]) while
-//! their camera samples leave it out ([`Emission::Elsewhere`]): the same expectation, far
-//! less variance per second. Which pixels do so is decided once per render from the
+//! [`Integrator::emitted`]) while their camera samples leave it out
+//! ([`super::integrator::Emission::Elsewhere`]): the same expectation, far less variance per
+//! second. Which pixels do so is decided once per render from the
 //! geometry alone ([`EmissionPixels::find`]), so that every pass, thread count and shard
 //! agrees. Owns that choice; must not shade diffuse surfaces.
 
 use super::camera::PinholeCamera;
-use super::integrator::{Emission, Integrator};
+use super::integrator::Integrator;
 use crate::scene::Material;
 use crate::world::{Surface, World};
 use glam::Vec3;
@@ -75,16 +75,6 @@ impl EmissionPixels {
     #[inline]
     pub fn flagged(&self, pixel: usize) -> bool {
         self.samples > 0 && self.flagged[pixel]
-    }
-
-    /// How a camera sample of `pixel` treats the emitted light it meets.
-    #[inline]
-    pub fn camera_emission(&self, pixel: usize) -> Emission {
-        if self.flagged(pixel) {
-            Emission::Elsewhere
-        } else {
-            Emission::Counted
-        }
     }
 
     pub fn samples(&self) -> u32 {
