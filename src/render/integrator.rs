@@ -267,23 +267,11 @@ impl Integrator<'_> {
                 Surface::Material(m) => m,
             };
             let (ng, ns) = hit.facing(dir);
-            let next = match self.world.material(m) {
-                Material::Diffuse { .. } => return Vec3::ZERO,
-                Material::Mirror { tint } => {
-                    throughput *= *tint;
-                    reflect(dir, ns)
-                }
-                Material::Glass {
-                    ior,
-                    reflect_tint,
-                    transmit_tint,
-                } => {
-                    let eta = if hit.entering(dir) { 1.0 / ior } else { *ior };
-                    let (next, branch) = scatter_dielectric(dir, ns, eta, rng.next_f32());
-                    throughput *= branch.pick(*reflect_tint, *transmit_tint);
-                    next
-                }
+            let material = self.world.material(m);
+            let Some((next, tint)) = sampled_specular(material, &hit, dir, ns, rng) else {
+                return Vec3::ZERO;
             };
+            throughput *= tint;
             origin = self.spawn(hit.position, ng, next);
             dir = next;
         }
@@ -385,37 +373,51 @@ impl Integrator<'_> {
                 break;
             };
             let (ng, ns) = hit.facing(d);
-            let next = match self.world.material(m) {
-                Material::Diffuse { albedo } => {
-                    let q = Query {
-                        position: hit.position,
-                        normal: ns,
-                    };
-                    // The full estimate where the table has no agreeing point (see
-                    // `estimate::precomputed`).
-                    let e = precomputed
-                        .and_then(|t| t.lookup(&q, scratch))
-                        .unwrap_or_else(|| map.irradiance(&q, scratch));
-                    return throughput * *albedo * FRAC_1_PI * e;
-                }
-                Material::Mirror { tint } => {
-                    throughput *= *tint;
-                    reflect(d, ns)
-                }
-                Material::Glass {
-                    ior,
-                    reflect_tint,
-                    transmit_tint,
-                } => {
-                    let eta = if hit.entering(d) { 1.0 / ior } else { *ior };
-                    let (next, branch) = scatter_dielectric(d, ns, eta, rng.next_f32());
-                    throughput *= branch.pick(*reflect_tint, *transmit_tint);
-                    next
-                }
+            let material = self.world.material(m);
+            if let Material::Diffuse { albedo } = material {
+                let q = Query {
+                    position: hit.position,
+                    normal: ns,
+                };
+                // The full estimate where the table has no agreeing point (see
+                // `estimate::precomputed`).
+                let e = precomputed
+                    .and_then(|t| t.lookup(&q, scratch))
+                    .unwrap_or_else(|| map.irradiance(&q, scratch));
+                return throughput * *albedo * FRAC_1_PI * e;
+            }
+            let Some((next, tint)) = sampled_specular(material, &hit, d, ns, rng) else {
+                break;
             };
+            throughput *= tint;
             o = self.spawn(hit.position, ng, next);
             d = next;
         }
         Vec3::ZERO
+    }
+}
+
+/// Where a path that meets `material` at `hit` along `dir` (shading normal `ns`, facing the
+/// ray) goes on, and the tint it takes: a mirror reflects; glass reflects or refracts, one
+/// branch chosen with the Fresnel reflectance as probability. `None` at a diffuse surface.
+fn sampled_specular(
+    material: &Material,
+    hit: &crate::world::Interaction,
+    dir: Vec3,
+    ns: Vec3,
+    rng: &mut crate::sampling::Rng,
+) -> Option<(Vec3, Vec3)> {
+    match material {
+        Material::Diffuse { .. } => None,
+        Material::Mirror { tint } => Some((reflect(dir, ns), *tint)),
+        Material::Glass {
+            ior,
+            reflect_tint,
+            transmit_tint,
+        } => {
+            let eta = if hit.entering(dir) { 1.0 / ior } else { *ior };
+            let (next, branch) = scatter_dielectric(dir, ns, eta, rng.next_f32());
+            Some((next, branch.pick(*reflect_tint, *transmit_tint)))
+        }
     }
 }
