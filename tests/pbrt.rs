@@ -270,8 +270,11 @@ fn render_pbrt(text: &str) -> (pipeline::RenderOutcome, scene::SceneDescription)
         path_str(&out),
         "--threads",
         "2",
-        // Pixels are checked at their camera sample: emitters and sky not sampled apart.
+        // Pixels are checked at their one camera sample: emitters and sky not sampled apart,
+        // and edge pixels take no more samples than the rest.
         "--emission-samples",
+        "0",
+        "--edge-samples",
         "0",
     ]))
     .unwrap_or_else(|e| panic!("{e}"));

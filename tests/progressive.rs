@@ -481,7 +481,8 @@ fn dimensionless_diffusivity_holds_as_the_radius_shrinks() {
 }
 
 /// The defaults chosen by measurement (README, "Choosing the defaults"): 8 passes of 100,000
-/// caustic and 50,000 global photons, the global map shown directly; one pass with a photon
+/// caustic and 300,000 global photons, the global map shown directly, 4 light samples, 4
+/// camera samples in edge pixels, the caustic radius of 100 photons; one pass with a photon
 /// map file; as many as the budget holds with --time alone.
 #[test]
 fn a_default_render_is_eight_progressive_passes() {
@@ -499,9 +500,12 @@ fn a_default_render_is_eight_progressive_passes() {
         (args.caustic_photons, args.final_gather, args.spp),
         (100_000, 0, 1)
     );
+    assert_eq!((args.light_samples, args.edge_samples), (4, 4));
     let o = pipeline::run(&args).expect("render");
     assert_eq!(o.film.passes().ranges(), &[(0, 8)]);
-    assert_eq!(o.film.header.settings.global_photons, 200_000);
+    let settings = &o.film.header.settings;
+    assert_eq!(settings.global_photons, 300_000);
+    assert_eq!(settings.estimator.k, 100);
     assert_eq!(o.caustic.map(|c| c.stored), Some(100_000));
 }
 

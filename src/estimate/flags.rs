@@ -4,7 +4,7 @@
 //! not hold anything a film records that the plain settings do not.
 
 use super::diffusion::{DiffusionKernel, DiffusivityUnits};
-use super::settings::{EstimatorKind, EstimatorSettings};
+use super::settings::{EstimatorKind, EstimatorSettings, PAPER_K};
 
 /// Radiance-estimate flags, shared by `dpm render`, `dpm density` and their progressive runs.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
@@ -17,11 +17,14 @@ pub struct EstimatorFlags {
     pub estimator: EstimatorKind,
 
     /// Photons per estimate for the k-NN estimates (the k-th sets the radius and is left out,
-    /// so k ≥ 2). For the fixed-radius estimates it sets the default --radius. 400 is the
-    /// paper's cone-filter setting, the baseline the diffusion estimate is compared with;
-    /// the diffusion estimate's flat regions are quieter with ~1000 (see --diffusivity).
-    #[arg(long, default_value_t = 400, allow_negative_numbers = true)]
-    pub k: usize,
+    /// so k ≥ 2); default 400, the paper's cone-filter setting, the baseline the diffusion
+    /// estimate is compared with. For the fixed-radius estimates it sets the default --radius
+    /// (a disc of about k photons where photons typically are): 400 in `dpm density`, 100 in
+    /// `dpm render`, whose caustics' error at a render's budget was mostly the blur of their
+    /// bright folds (README, "Choosing the defaults"). The diffusion estimate's flat regions
+    /// are quieter with more (see --diffusivity).
+    #[arg(long, allow_negative_numbers = true)]
+    pub k: Option<usize>,
 
     /// Support radius of the fixed-radius estimates (epanechnikov, diffusion), in scene units.
     /// For the k-NN estimates it caps the search instead (default: no cap). Default for the
@@ -119,11 +122,22 @@ pub struct EstimatorFlags {
 }
 
 impl EstimatorFlags {
-    /// The plain settings these flags give.
+    /// The plain settings these flags give, `--k` defaulting to the paper's 400.
     pub fn settings(&self) -> EstimatorSettings {
+        self.settings_with_radius_k(PAPER_K)
+    }
+
+    /// The plain settings, with `fixed_radius_k` as `--k`'s default for the fixed-radius
+    /// estimates (the k-NN ones keep 400).
+    pub fn settings_with_radius_k(&self, fixed_radius_k: usize) -> EstimatorSettings {
+        let default_k = if self.estimator.is_fixed_radius() {
+            fixed_radius_k
+        } else {
+            PAPER_K
+        };
         EstimatorSettings {
             estimator: self.estimator,
-            k: self.k,
+            k: self.k.unwrap_or(default_k),
             radius: self.radius,
             cone_slope: self.cone_slope,
             gradient_radius: self.gradient_radius,

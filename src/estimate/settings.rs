@@ -28,6 +28,16 @@ pub enum EstimatorKind {
     Diffusion,
 }
 
+impl EstimatorKind {
+    /// Whether the estimate has a fixed radius (`k` then only sets its default).
+    pub fn is_fixed_radius(self) -> bool {
+        matches!(self, EstimatorKind::Epanechnikov | EstimatorKind::Diffusion)
+    }
+}
+
+/// `k` of the paper's baseline, the cone filter with 400 photons an estimate.
+pub const PAPER_K: usize = 400;
+
 /// A setting that cannot work, naming the flag.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum EstimateError {
@@ -86,7 +96,7 @@ impl Default for EstimatorSettings {
     fn default() -> Self {
         Self {
             estimator: EstimatorKind::Diffusion,
-            k: 400,
+            k: PAPER_K,
             radius: None,
             cone_slope: 1.1,
             gradient_radius: None,

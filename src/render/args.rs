@@ -104,7 +104,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = DEFAULT_CAUSTIC_PHOTONS, allow_negative_numbers = true)]
     pub caustic_photons: usize,
 
-    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 200000 when
+    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 300000 when
     /// the scene has two or more diffuse objects (so diffuse light can bounce between them),
     /// else 0 (no global map: a lone plane cannot light itself).
     #[arg(long, allow_negative_numbers = true)]
@@ -133,7 +133,7 @@ pub struct RenderArgs {
     #[arg(
         long,
         value_name = "N",
-        default_value_t = 1,
+        default_value_t = DEFAULT_LIGHT_SAMPLES,
         allow_negative_numbers = true
     )]
     pub light_samples: u32,
@@ -154,6 +154,15 @@ pub struct RenderArgs {
     /// are rays only, so many cost little. 0: camera samples count it themselves
     #[arg(long, value_name = "N", default_value_t = DEFAULT_EMISSION_SAMPLES)]
     pub emission_samples: u32,
+
+    /// Camera samples per pass in the pixels that hold an edge: where the pixel's pilot rays
+    /// (its centre and corners, traced once per render) see other objects, other chains
+    /// through mirrors and glass, normals turned more than 30°, or a light point that one
+    /// sees and another does not (a shadow's edge). A pixel's value there is the mean of a
+    /// step across it, which one sample a pass resolves slowly; these samples cost little
+    /// beside the image. 0: edge pixels take --spp like the rest (so does any N below it).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_EDGE_SAMPLES)]
+    pub edge_samples: u32,
 
     /// Caustic radiance estimate.
     #[command(flatten)]
@@ -183,6 +192,46 @@ pub struct RenderArgs {
     pub load_photons: Option<PathBuf>,
 }
 
+impl RenderArgs {
+    /// The per-pass sample counts and the irradiance stride, each within its range; the
+    /// error names the flag and the range.
+    pub fn check_counts(&self) -> Result<(), String> {
+        let counts = [
+            (
+                "light-samples",
+                self.light_samples as usize,
+                1,
+                MAX_LIGHT_SAMPLES as usize,
+            ),
+            (
+                "emission-samples",
+                self.emission_samples as usize,
+                0,
+                MAX_EMISSION_SAMPLES as usize,
+            ),
+            (
+                "edge-samples",
+                self.edge_samples as usize,
+                0,
+                MAX_EDGE_SAMPLES as usize,
+            ),
+            (
+                "irradiance-stride",
+                self.irradiance_stride,
+                0,
+                MAX_IRRADIANCE_STRIDE,
+            ),
+        ];
+        for (flag, value, least, most) in counts {
+            if !(least..=most).contains(&value) {
+                let from = if least == 0 { "0 (off)" } else { "1" };
+                return Err(format!("--{flag} {value}: must be from {from} to {most}"));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// `--resolution`'s value: two whole numbers >= 1 joined by `x` (`1280x720`).
 pub fn parse_resolution(text: &str) -> Result<(u32, u32), String> {
     let wanted = "expected WIDTHxHEIGHT in pixels, e.g. 1280x720";
@@ -207,13 +256,23 @@ pub const MAX_IRRADIANCE_STRIDE: usize = 1 << 16;
 
 /// Passes per render by default: chosen by measurement (README, "Choosing the defaults").
 pub const DEFAULT_PASSES: u64 = 8;
+/// `--k` of the fixed-radius caustic estimates by default: their radius holds about this
+/// many photons where photons typically are (README, "Choosing the defaults").
+pub const DEFAULT_RADIUS_K: usize = 100;
 /// Stored caustic photons per pass by default.
 pub const DEFAULT_CAUSTIC_PHOTONS: usize = 100_000;
 /// Stored global photons per pass by default (scenes with two or more diffuse objects).
-pub const DEFAULT_GLOBAL_PHOTONS: usize = 200_000;
+pub const DEFAULT_GLOBAL_PHOTONS: usize = 300_000;
+/// Shadow rays per area light at each diffuse eye hit by default (README, "Choosing the
+/// defaults").
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 4;
 /// Glass hits that split an eye path by default (README, "Whole scenes").
 pub const DEFAULT_GLASS_SPLIT_DEPTH: u32 = 1000;
 /// Emission samples per flagged pixel and pass by default (README, "Choosing the defaults").
 pub const DEFAULT_EMISSION_SAMPLES: u32 = 16;
+/// Camera samples per pass in edge pixels by default (README, "Choosing the defaults").
+pub const DEFAULT_EDGE_SAMPLES: u32 = 4;
+/// Most camera samples an edge pixel may take per pass (more is a typo, not a setting).
+pub const MAX_EDGE_SAMPLES: u32 = 4096;
 /// Most emission samples a pixel may take per pass (more is a typo, not a setting).
 pub const MAX_EMISSION_SAMPLES: u32 = 65_536;

@@ -114,7 +114,13 @@ impl PassSamples {
 
     /// Sample `s` (< spp) of pixel `pixel` (row-major index) in this pass.
     pub fn sample(&self, pixel: u64, s: u32) -> CameraSample {
-        let index = self.pass * self.spp as u64 + s as u64;
+        self.sample_of(pixel, s, self.spp)
+    }
+
+    /// Sample `s` (< `count`) of pixel `pixel` where that pixel takes `count` camera samples
+    /// a pass (an edge pixel takes more than `spp`, in every pass alike).
+    pub fn sample_of(&self, pixel: u64, s: u32, count: u32) -> CameraSample {
+        let index = self.pass * count as u64 + s as u64;
         // The scramble depends on the seed and the pixel, not the pass: one sequence per pixel.
         let scramble = StreamSeed::new(self.seed, Stream::Pixels)
             .rng(pixel ^ (index / SOBOL_BLOCK).wrapping_mul(0x9E37_79B9_7F4A_7C15))
@@ -128,7 +134,8 @@ impl PassSamples {
                     .next_u64(),
                 index,
             ),
-            rng: self.stream.rng(pixel * self.spp as u64 + s as u64),
+            // Keyed by (pixel, sample), never by a running count: pixels take different counts.
+            rng: self.stream.rng(pixel << 32 | s as u64),
         }
     }
 }

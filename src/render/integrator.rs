@@ -67,6 +67,7 @@ impl std::ops::Mul<Radiance> for f32 {
 }
 
 /// A photon map with the estimate that reads it.
+#[derive(Clone, Copy)]
 pub struct EstimatedMap<'a> {
     pub map: &'a PhotonMap,
     pub estimate: &'a dyn RadianceEstimate,
@@ -79,6 +80,7 @@ impl EstimatedMap<'_> {
 }
 
 /// How indirect diffuse light is found.
+#[derive(Clone, Copy)]
 pub enum Indirect<'a> {
     None,
     /// The global map's estimate at the eye ray's diffuse hit (it holds indirect photons only).
@@ -93,6 +95,7 @@ pub enum Indirect<'a> {
     },
 }
 
+#[derive(Clone, Copy)]
 pub struct Integrator<'a> {
     pub world: &'a World,
     pub caustics: Option<EstimatedMap<'a>>,

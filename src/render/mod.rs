@@ -19,6 +19,7 @@ pub mod merge;
 pub mod output;
 pub mod pass;
 pub mod photon_files;
+pub mod pilots;
 pub mod pipeline;
 pub mod schedule;
 

@@ -17,10 +17,11 @@
 //! estimate of the whole image on its own and the film averages passes with equal weights.
 
 use super::camera::{PassSamples, PinholeCamera};
-use super::emission::{EmissionPixels, emitted_mean};
+use super::emission::emitted_mean;
 use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
 use super::integrator::Emission;
 use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
+use super::pilots::PixelPlan;
 use super::schedule::{Schedule, fixed_radius, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::kernel::RadialKernel;
@@ -69,6 +70,11 @@ pub struct RenderSettings {
     /// Films written before it existed counted it in their camera samples.
     #[serde(default)]
     pub emission_samples: u32,
+    /// Camera samples per pass in the pixels whose pilot rays find an edge
+    /// (`render::pilots`); 0: they take `spp` like the rest. Films written before it existed
+    /// took `spp` everywhere.
+    #[serde(default)]
+    pub edge_samples: u32,
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
     pub estimator: EstimatorSettings,
@@ -208,8 +214,8 @@ pub struct PassContext<'a> {
     pub schedule: Schedule,
     /// Whether to fill the kernel-field channels (diffusion estimate only).
     pub kernel_field: bool,
-    /// The pixels that sample their emitted light apart (found once per render).
-    pub emission: &'a EmissionPixels,
+    /// How each pixel spends its samples (planned once per render by the pilot rays).
+    pub plan: &'a PixelPlan,
 }
 
 impl PassContext<'_> {
@@ -341,7 +347,7 @@ impl PassContext<'_> {
             &self.camera,
             &integrator,
             &samples,
-            Some(self.emission),
+            Some(self.plan),
             probe.as_ref(),
             self.channels(),
             &bar,
@@ -354,7 +360,8 @@ impl PassContext<'_> {
             &[
                 ("pixels", pixels),
                 ("spp", self.settings.spp as u64),
-                ("emission pixels", self.emission.count() as u64),
+                ("emission pixels", self.plan.emission_pixels() as u64),
+                ("edge pixels", self.plan.edge_pixels() as u64),
             ],
         );
         if crate::interrupt::requested() {
@@ -408,6 +415,9 @@ impl KernelProbe<'_> {
     }
 }
 
+/// Glass hits that split an edge pixel's camera paths at most.
+const EDGE_GLASS_SPLIT_DEPTH: u32 = 1;
+
 /// Every pixel of one pass, rows in parallel (one row per job: rows of very different cost,
 /// a caustic against empty floor, are shared out evenly), each thread with its own scratch.
 /// Pixels not yet started when an interruption is requested are left black; the caller must
@@ -416,7 +426,7 @@ pub fn shade_pass(
     camera: &PinholeCamera,
     integrator: &Integrator,
     samples: &PassSamples,
-    emission: Option<&EmissionPixels>,
+    plan: Option<&PixelPlan>,
     probe: Option<&KernelProbe>,
     channels: usize,
     progress: &ProgressBar,
@@ -424,6 +434,13 @@ pub fn shade_pass(
     let (w, h) = (camera.width(), camera.height());
     let mut image = PassImage::new(w, h, channels);
     let spp = samples.spp();
+    // Edge pixels' many samples each follow one branch past the first glass hit: a split
+    // tree per sample multiplied their cost by the tree's size for detail the samples
+    // themselves average in.
+    let edge_integrator = Integrator {
+        glass_split_depth: integrator.glass_split_depth.min(EDGE_GLASS_SPLIT_DEPTH),
+        ..*integrator
+    };
     image
         .values
         .par_chunks_mut(w * channels)
@@ -436,23 +453,29 @@ pub fn shade_pass(
                     return;
                 }
                 let pixel = (y * w + x) as u64;
-                let apart = emission.filter(|e| e.flagged(pixel as usize));
+                let apart = plan.filter(|p| p.emission_apart(pixel as usize));
                 let counted = if apart.is_some() {
                     Emission::Elsewhere
                 } else {
                     Emission::Counted
                 };
+                let count = plan.map_or(spp, |p| p.camera_samples(pixel as usize, spp));
+                let integrator = if count > spp {
+                    &edge_integrator
+                } else {
+                    integrator
+                };
                 let mut sum = Radiance::default();
-                for s in 0..spp {
-                    let sample = samples.sample(pixel, s);
+                for s in 0..count {
+                    let sample = samples.sample_of(pixel, s, count);
                     let (jx, jy) = sample.jitter;
                     let d = camera.direction(x as f32 + jx, y as f32 + jy);
                     let mut sampler = PathSampler::new(sample.rng, Some(sample.sequence));
                     sum += integrator.trace(camera.origin(), d, 0, counted, &mut sampler, scratch);
                 }
-                let mut mean = (1.0 / spp.max(1) as f32) * sum;
-                if let Some(e) = apart {
-                    let n = e.samples();
+                let mut mean = (1.0 / count.max(1) as f32) * sum;
+                if let Some(p) = apart {
+                    let n = p.emission_samples();
                     let at = (0..n).map(|j| {
                         let ((jx, jy), rng) = samples.emission_sample(pixel, j, n);
                         ((x as f32 + jx, y as f32 + jy), rng)

@@ -11,17 +11,17 @@
 
 pub use super::args::{
     DEFAULT_CAUSTIC_PHOTONS, DEFAULT_EMISSION_SAMPLES, DEFAULT_GLASS_SPLIT_DEPTH,
-    DEFAULT_GLOBAL_PHOTONS, DEFAULT_PASSES, MAX_EMISSION_SAMPLES, MAX_IRRADIANCE_STRIDE,
-    MAX_LIGHT_SAMPLES, RenderArgs, parse_resolution,
+    DEFAULT_GLOBAL_PHOTONS, DEFAULT_PASSES, DEFAULT_RADIUS_K, MAX_EDGE_SAMPLES,
+    MAX_EMISSION_SAMPLES, MAX_IRRADIANCE_STRIDE, MAX_LIGHT_SAMPLES, RenderArgs, parse_resolution,
 };
 use super::camera::PinholeCamera;
-use super::emission::EmissionPixels;
 use super::film::{Film, FilmHeader};
 use super::film_file::{self, FilmFileError};
 use super::memory_budget::check_memory;
 use super::output::{write_film_image, write_kernel_field};
 use super::pass::{BaseRadii, PassContext, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
 use super::photon_files::{load_maps, save_maps, validate_photon_files};
+use super::pilots::PixelPlan;
 use super::schedule::{MAX_PASSES, Schedule};
 use crate::embree::{self, EmbreeError};
 use crate::estimate::settings::{EstimateError, EstimatorKind};
@@ -116,7 +116,9 @@ pub struct RenderOutcome {
 
 /// Checks the options that need no scene, before any work is done.
 pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
-    args.estimate.settings().validate()?;
+    args.estimate
+        .settings_with_radius_k(DEFAULT_RADIUS_K)
+        .validate()?;
     let output = args.output.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().unwrap_or_default();
         PathBuf::from(stem).with_extension("png")
@@ -142,24 +144,7 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
     if args.global_k < 2 {
         return invalid(format!("--global-k {}: must be at least 2", args.global_k));
     }
-    if !(1..=MAX_LIGHT_SAMPLES).contains(&args.light_samples) {
-        return invalid(format!(
-            "--light-samples {}: must be from 1 to {MAX_LIGHT_SAMPLES}",
-            args.light_samples
-        ));
-    }
-    if args.emission_samples > MAX_EMISSION_SAMPLES {
-        return invalid(format!(
-            "--emission-samples {}: must be from 0 (off) to {MAX_EMISSION_SAMPLES}",
-            args.emission_samples
-        ));
-    }
-    if args.irradiance_stride > MAX_IRRADIANCE_STRIDE {
-        return invalid(format!(
-            "--irradiance-stride {}: must be from 0 (off) to {MAX_IRRADIANCE_STRIDE}",
-            args.irradiance_stride
-        ));
-    }
+    args.check_counts().map_err(RenderError::Invalid)?;
     if args.passes == Some(0) {
         return invalid("--passes 0: at least one pass".into());
     }
@@ -272,8 +257,9 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         light_samples: args.light_samples,
         glass_split_depth: args.glass_split_depth,
         emission_samples: args.emission_samples,
+        edge_samples: args.edge_samples,
         alpha: args.ppm_alpha,
-        estimator: args.estimate.settings(),
+        estimator: args.estimate.settings_with_radius_k(DEFAULT_RADIUS_K),
     }
 }
 
@@ -366,16 +352,28 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         None => progress(last - first, "passes"),
     };
     let pinhole = PinholeCamera::new(camera);
-    let found = times.time("emission pixels", || {
-        EmissionPixels::find(&pinhole, &world, settings.emission_samples)
+    let found = times.time("pilot rays", || {
+        PixelPlan::survey(
+            &pinhole,
+            &world,
+            settings.max_depth,
+            settings.emission_samples,
+            settings.edge_samples,
+        )
     });
-    let Some(emission) = found else {
+    let Some(plan) = found else {
         return Err(RenderError::Interrupted {
             output,
             saved_photons: None,
         });
     };
-    times.add_counts("emission pixels", &[("pixels", emission.count() as u64)]);
+    times.add_counts(
+        "pilot rays",
+        &[
+            ("emission pixels", plan.emission_pixels() as u64),
+            ("edge pixels", plan.edge_pixels() as u64),
+        ],
+    );
     let mut records: Vec<PassRecord> = Vec::new();
     let mut last_report = None;
     let mut last_write: Option<Instant> = None;
@@ -413,7 +411,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         let context = PassContext {
             world: &world,
             camera: pinhole,
-            emission: &emission,
+            plan: &plan,
             settings: &settings,
             radii,
             schedule,

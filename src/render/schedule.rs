@@ -47,7 +47,7 @@ impl Schedule {
 }
 
 pub fn fixed_radius(kind: EstimatorKind) -> bool {
-    matches!(kind, EstimatorKind::Epanechnikov | EstimatorKind::Diffusion)
+    kind.is_fixed_radius()
 }
 
 /// The estimate's settings in pass `pass`, from the run's settings and the base radius pass 0

@@ -143,6 +143,11 @@ impl ClosestHit {
     pub fn t(&self) -> f32 {
         self.hit.t
     }
+
+    /// The object hit (its Embree geometry), the same for every hit of one shape.
+    pub fn geometry(&self) -> u32 {
+        self.hit.geometry
+    }
 }
 
 pub struct World {

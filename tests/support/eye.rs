@@ -193,7 +193,9 @@ pub fn plane_scene(lights: &str, width: u32, height: u32) -> String {
 pub const PLANE_HALF: f64 = 2.0;
 pub const PLANE_ALBEDO: f64 = 0.5;
 
-/// A one-pass render of `text` (extra `dpm render` flags in `args`), and the scene.
+/// A one-pass render of `text` (extra `dpm render` flags in `args`), and the scene. Every
+/// pixel takes one camera sample (no edge samples), at the jitter [`check_plane_pixels`]
+/// works out again.
 pub fn render_scene(
     text: &str,
     args: &[&str],
@@ -202,6 +204,7 @@ pub fn render_scene(
     let scene = write_scene(dir.path(), "scene.toml", text);
     let out = dir.path().join("scene.pfm");
     let mut all = vec![path_str(&scene), "-o", path_str(&out), "--threads", "2"];
+    all.extend_from_slice(&["--edge-samples", "0"]);
     all.extend_from_slice(args);
     let outcome = pipeline::run(&render_args(&all)).expect("render");
     let image = dpm::image_io::read_pfm(&out).expect("read the PFM back");

@@ -390,6 +390,26 @@ impl MeshLight {
         self.power
     }
 
+    /// A sphere round each triangle, or one round them all past `most` triangles (none for
+    /// a mesh without area, which emits nothing).
+    pub(super) fn bounding_spheres(&self, most: usize) -> Vec<BoundingSphere> {
+        let corners = |t: &Triangle| [t.corner, t.corner + t.edge_1, t.corner + t.edge_2];
+        let around = |points: &mut dyn Iterator<Item = Vec3>| {
+            let first = points.next()?;
+            let (lo, hi) = points.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
+            Some(BoundingSphere::around_box(lo, hi))
+        };
+        if self.triangles.len() <= most {
+            (self.triangles.iter())
+                .filter_map(|t| around(&mut corners(t).into_iter()))
+                .collect()
+        } else {
+            around(&mut self.triangles.iter().flat_map(corners))
+                .into_iter()
+                .collect()
+        }
+    }
+
     /// Radiance leaving a side that emits.
     fn radiance(&self) -> Vec3 {
         if self.triangles.is_empty() {

@@ -113,6 +113,11 @@ impl Distant {
     }
 
     /// Light from the one direction it comes from, unoccluded to infinity.
+    /// The unit direction towards the light.
+    pub(super) fn towards(&self) -> Vec3 {
+        -self.direction
+    }
+
     pub(super) fn incident(&self) -> IncidentSample {
         IncidentSample {
             direction: -self.direction,

@@ -48,6 +48,29 @@ pub fn weight(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722)).max(0.0)
 }
 
+/// A light's shape: where its light comes from, for the pilot rays' visibility tests.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightShape {
+    /// A point or spot light (invisible to the eye).
+    Point(Vec3),
+    /// A distant light (invisible to the eye): the unit direction towards it.
+    Direction(Vec3),
+    Sphere(BoundingSphere),
+    Quad {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+    },
+    /// A mesh light: a sphere round each triangle, or one round them all past
+    /// [`MESH_SPHERES`] triangles (none for a mesh without area, which emits nothing).
+    Mesh(Vec<BoundingSphere>),
+    /// The environment: light from every direction.
+    Everywhere,
+}
+
+/// Triangles past which a mesh light's shape is one sphere round them all.
+pub const MESH_SPHERES: usize = 64;
+
 /// A scene light with what every sample of it shares worked out once: a spot's intensity, a
 /// mesh's table of triangle areas, the scene's bounding sphere for the lights at infinity.
 #[derive(Clone, Debug)]
@@ -175,6 +198,31 @@ impl LightSource {
             Kind::Point { .. } | Kind::Spot(_) | Kind::Distant(_) | Kind::Environment(_) => {
                 Vec3::ZERO
             }
+        }
+    }
+
+    /// Where this light's light comes from, as the pilot rays see it.
+    pub fn shape(&self) -> LightShape {
+        match &self.0 {
+            Kind::Point { position, .. } => LightShape::Point(*position),
+            Kind::Spot(spot) => LightShape::Point(spot.position()),
+            Kind::Sphere { center, radius, .. } => LightShape::Sphere(BoundingSphere {
+                center: *center,
+                radius: *radius,
+            }),
+            Kind::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                ..
+            } => LightShape::Quad {
+                corner: *corner,
+                edge_u: *edge_u,
+                edge_v: *edge_v,
+            },
+            Kind::Mesh(mesh) => LightShape::Mesh(mesh.bounding_spheres(MESH_SPHERES)),
+            Kind::Distant(distant) => LightShape::Direction(distant.towards()),
+            Kind::Environment(_) => LightShape::Everywhere,
         }
     }
 

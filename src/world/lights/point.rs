@@ -94,6 +94,10 @@ pub(super) struct Spot {
 }
 
 impl Spot {
+    pub(super) fn position(&self) -> Vec3 {
+        self.position
+    }
+
     pub(super) fn new(
         position: Vec3,
         direction: Vec3,
