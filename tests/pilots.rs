@@ -155,6 +155,23 @@ fn a_shadows_edge_makes_exactly_its_column_an_edge() {
     let text = shadow_scene(27.37);
     let flags = edges(&plan(&text, 16, 4));
     assert_eq!(flags, (0..SIDE).map(|y| (27, y)).collect::<Vec<_>>());
+    // The same shadow from a small sphere light far along the distant light's line (its
+    // probe is the point of its surface facing the wall, which a shadow ray reaches without
+    // stopping at the light itself).
+    let x = world_x(27.37, 10.0) + 100.0;
+    let sphere = format!(
+        "[[lights]]\ntype = \"sphere\"\ncenter = [{x}, 0.0, 100.0]\nradius = 0.01\n\
+         power = [1000.0, 1000.0, 1000.0]\n"
+    );
+    let distant = text.find("[[lights]]").expect("a light");
+    let end = distant + text[distant..].find("\n\n").expect("its end");
+    let text = format!("{}{sphere}{}", &text[..distant], &text[end..]);
+    assert!(
+        text.contains("sphere") && !text.contains("distant"),
+        "{text}"
+    );
+    let flags = edges(&plan(&text, 16, 4));
+    assert_eq!(flags, (0..SIDE).map(|y| (27, y)).collect::<Vec<_>>());
 }
 
 /// In the shadow's edge column, 64 edge samples in one pass give the lit fraction of the

@@ -480,7 +480,7 @@ fn dimensionless_diffusivity_holds_as_the_radius_shrinks() {
     }
 }
 
-/// The defaults chosen by measurement (README, "Choosing the defaults"): 8 passes of 100,000
+/// The defaults chosen by measurement (README, "Choosing the defaults"): 8 passes of 75,000
 /// caustic and 300,000 global photons, the global map shown directly, 4 light samples, 4
 /// camera samples in edge pixels, the caustic radius of 100 photons; one pass with a photon
 /// map file; as many as the budget holds with --time alone.
@@ -498,7 +498,7 @@ fn a_default_render_is_eight_progressive_passes() {
     let args = Cli::parse_from(["dpm", path_str(&scene), "-o", path_str(&out)]).args;
     assert_eq!(
         (args.caustic_photons, args.final_gather, args.spp),
-        (100_000, 0, 1)
+        (75_000, 0, 1)
     );
     assert_eq!((args.light_samples, args.edge_samples), (4, 4));
     let o = pipeline::run(&args).expect("render");
@@ -506,7 +506,7 @@ fn a_default_render_is_eight_progressive_passes() {
     let settings = &o.film.header.settings;
     assert_eq!(settings.global_photons, 300_000);
     assert_eq!(settings.estimator.k, 100);
-    assert_eq!(o.caustic.map(|c| c.stored), Some(100_000));
+    assert_eq!(o.caustic.map(|c| c.stored), Some(75_000));
 }
 
 /// A shard that does not start at pass 0 with every radius given (no global map, `--radius`)

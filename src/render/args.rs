@@ -260,7 +260,7 @@ pub const DEFAULT_PASSES: u64 = 8;
 /// many photons where photons typically are (README, "Choosing the defaults").
 pub const DEFAULT_RADIUS_K: usize = 100;
 /// Stored caustic photons per pass by default.
-pub const DEFAULT_CAUSTIC_PHOTONS: usize = 100_000;
+pub const DEFAULT_CAUSTIC_PHOTONS: usize = 75_000;
 /// Stored global photons per pass by default (scenes with two or more diffuse objects).
 pub const DEFAULT_GLOBAL_PHOTONS: usize = 300_000;
 /// Shadow rays per area light at each diffuse eye hit by default (README, "Choosing the

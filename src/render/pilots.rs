@@ -7,8 +7,9 @@
 //!   scene under a lit environment, or passes within the pixel's spread of a light, so a light
 //!   image smaller than the pilots' spacing may lie inside the pixel ([`super::emission`]).
 //! - **Edge** (`--edge-samples`): the pilots disagree on what the pixel shows — other objects
-//!   along their chains, another chain shape, normals more than 30° apart, or a light point
-//!   visible from one pilot's diffuse hit and hidden from another's (a shadow's edge). A
+//!   along their chains, another chain shape, normals more than 30° apart, or a light's
+//!   probe point visible from one pilot's diffuse hit and hidden from another's (a shadow's
+//!   edge). A
 //!   pixel's value there is the mean of a step across it, which camera samples resolve slowly;
 //!   such pixels take more camera samples a pass, where they cost little beside the image.
 //!
@@ -147,15 +148,15 @@ struct Survey<'w> {
     max_depth: u32,
     /// Spheres round the lights a camera can see.
     visible: Vec<BoundingSphere>,
-    /// Points on the lights whose visibility tells a shadow's edge.
+    /// One point on each light whose visibility tells a shadow's edge.
     probes: Vec<Probe>,
 }
 
-/// A point a shadow ray is aimed at: on a light, or a direction to infinity.
+/// Where a pilot's shadow ray is aimed: a point on a light, or a direction to infinity.
 #[derive(Clone, Copy, Debug)]
 enum Probe {
     Point(Vec3),
-    /// A sphere light: four points of its silhouette seen from the hit.
+    /// A sphere light: the point of its surface nearest the hit.
     Sphere {
         center: Vec3,
         radius: f32,
@@ -167,7 +168,7 @@ impl<'w> Survey<'w> {
     fn new(world: &'w World, max_depth: u32) -> Self {
         let shapes: Vec<LightShape> = world.light_sources.iter().map(|l| l.shape()).collect();
         let visible = shapes.iter().flat_map(visible_bounds).collect();
-        let probes = shapes.iter().flat_map(shadow_probes).collect();
+        let probes = shapes.iter().filter_map(shadow_probe).collect();
         Self {
             world,
             max_depth,
@@ -179,27 +180,27 @@ impl<'w> Survey<'w> {
     fn pilot(&self, origin: Vec3, dir: Vec3) -> Pilot {
         let world = self.world;
         let mut pilot = Pilot::default();
-        let mut last_rays: Vec<(Vec3, Vec3)> = Vec::new();
-        let mut branches = vec![(origin, dir, 0u32, 1.0f32)];
+        // (origin, direction, depth, Fresnel weight, branch code).
+        let mut branches = vec![(origin, dir, 0u32, 1.0f32, BranchCode::ROOT)];
+        let mut last_rays: Vec<(Vec3, Vec3, BranchCode)> = Vec::new();
         let mut followed = 0;
-        while let Some((o, d, depth, weight)) = branches.pop() {
+        while let Some((o, d, depth, weight, code)) = branches.pop() {
             followed += 1;
             if followed > MAX_PILOT_BRANCHES {
-                pilot.sees_emission = true;
                 pilot.tangled = true;
                 break;
             }
             let Some(closest) = world.closest_hit(o, d, 0.0, f32::INFINITY) else {
-                pilot.sees_emission |= world.background() != Vec3::ZERO;
+                pilot.emitting += u32::from(world.background() != Vec3::ZERO);
                 pilot.shape.add(u64::MAX);
-                last_rays.push((o, d));
+                last_rays.push((o, d, code));
                 continue;
             };
             pilot.shape.add(closest.geometry() as u64);
             let m = match closest.surface {
                 Surface::Light(_) => {
-                    pilot.sees_emission = true;
-                    last_rays.push((o, d));
+                    pilot.emitting += 1;
+                    last_rays.push((o, d, code));
                     continue;
                 }
                 Surface::Material(m) => m,
@@ -212,7 +213,7 @@ impl<'w> Survey<'w> {
             };
             match world.material(m) {
                 Material::Diffuse { .. } => {
-                    last_rays.push((o, d));
+                    last_rays.push((o, d, code));
                     if pilot.normal.is_none() {
                         pilot.normal = Some(ns);
                         pilot.visible = self.visibility(spawn(ns), ns);
@@ -223,7 +224,7 @@ impl<'w> Survey<'w> {
                 Material::Mirror { tint } => {
                     if tint.max_element() > 0.0 {
                         let r = reflect(d, ns);
-                        branches.push((spawn(r), r, depth + 1, weight));
+                        branches.push((spawn(r), r, depth + 1, weight, code.then(0)));
                     }
                 }
                 Material::Glass { ior, .. } => {
@@ -231,12 +232,13 @@ impl<'w> Survey<'w> {
                     let f = fresnel_dielectric(-d.dot(ns), eta);
                     if f * weight >= MIN_BRANCH_WEIGHT {
                         let r = reflect(d, ns);
-                        branches.push((spawn(r), r, depth + 1, f * weight));
+                        branches.push((spawn(r), r, depth + 1, f * weight, code.then(0)));
                     }
                     let refracted = refract(d, ns, eta).filter(|_| f < 1.0);
                     match refracted {
                         Some(t) if (1.0 - f) * weight >= MIN_BRANCH_WEIGHT => {
-                            branches.push((spawn(t), t, depth + 1, (1.0 - f) * weight));
+                            let next = (spawn(t), t, depth + 1, (1.0 - f) * weight, code.then(1));
+                            branches.push(next);
                         }
                         // Total internal reflection, or a branch too thin: the shape says so.
                         _ => pilot.shape.add(u64::MAX - 1),
@@ -244,12 +246,15 @@ impl<'w> Survey<'w> {
                 }
             }
         }
-        pilot.cone = bounding_cone(last_rays.iter().map(|&(_, d)| d));
-        for &(o, d) in &last_rays {
-            for light in &self.visible {
-                pilot.light_gap = pilot.light_gap.min(angle_to_sphere(o, d, light));
-            }
-        }
+        pilot.last_rays = (last_rays.iter())
+            .map(|&(o, d, code)| LastRay {
+                code,
+                direction: d,
+                light_gap: (self.visible.iter())
+                    .map(|light| gap_to_sphere(o, d, light))
+                    .fold(f32::INFINITY, f32::min),
+            })
+            .collect();
         pilot
     }
 
@@ -276,14 +281,10 @@ impl<'w> Survey<'w> {
             match *probe {
                 Probe::Point(q) => test(towards(q)),
                 Probe::Direction(d) => test(Some((d, f32::INFINITY))),
-                Probe::Sphere { center, radius } => {
-                    let axis = (center - p).normalize_or(Vec3::Z);
-                    let (t, b) = crate::sampling::basis(axis);
-                    // Just inside the silhouette, so the probe lies on the light.
-                    for side in [t, -t, b, -b] {
-                        test(towards(center + 0.95 * radius * side));
-                    }
-                }
+                // The ray stops short of the light's own surface, as shadow rays do.
+                Probe::Sphere { center, radius } => test(towards(
+                    center + radius * (p - center).normalize_or(Vec3::Z),
+                )),
             }
         }
         bits
@@ -291,7 +292,7 @@ impl<'w> Survey<'w> {
 }
 
 /// Spheres whose union holds the part of a light the eye can see, hugging it closely enough
-/// that a ray passing near one passes near the light: a sphere light itself, a quad's 2 × 2
+/// that a ray passing near one passes near the light: a sphere light itself, a quad's 4 × 4
 /// cells, a mesh light's triangles; none for lights the eye cannot see (points, spots,
 /// distant lights; the environment is seen by every ray that leaves the scene).
 fn visible_bounds(shape: &LightShape) -> Vec<BoundingSphere> {
@@ -302,69 +303,85 @@ fn visible_bounds(shape: &LightShape) -> Vec<BoundingSphere> {
             edge_u,
             edge_v,
         } => {
-            let (u, v) = (*edge_u / 2.0, *edge_v / 2.0);
+            // Cells small enough that a quad seen edge-on (a ceiling light) is not flagged
+            // in a band as tall as the quad is wide.
+            const CELLS: usize = 4;
+            let (u, v) = (*edge_u / CELLS as f32, *edge_v / CELLS as f32);
             let radius = 0.5 * (u + v).length().max((u - v).length());
-            [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
-                .map(|(s, t)| BoundingSphere {
-                    center: *corner + s * u + t * v + 0.5 * (u + v),
+            (0..CELLS * CELLS)
+                .map(|c| BoundingSphere {
+                    center: *corner
+                        + (c % CELLS) as f32 * u
+                        + (c / CELLS) as f32 * v
+                        + 0.5 * (u + v),
                     radius,
                 })
-                .to_vec()
+                .collect()
         }
-        LightShape::Mesh(spheres) => spheres.clone(),
+        LightShape::Mesh { spheres, .. } => spheres.clone(),
         LightShape::Point(_) | LightShape::Direction(_) | LightShape::Everywhere => Vec::new(),
     }
 }
 
-/// The points (or directions) a pilot's shadow rays test on a light: a point or spot light's
-/// position, a distant light's direction, four points of a sphere's silhouette, a quad's
-/// corners, the silhouette of a sphere round a mesh light; none for the environment. A
-/// shadow's edge falls between two pilots when some probe is seen from one and not the other;
-/// a light whose every probe is seen (or hidden) from both is taken as wholly seen (or hidden).
-fn shadow_probes(shape: &LightShape) -> Vec<Probe> {
+/// The one point (or direction) of a light that a pilot's shadow ray tests: a point or spot
+/// light's position, a distant light's direction, a sphere's surface nearest the hit, a
+/// quad's centre, a point of a mesh light's largest triangle; none for the environment.
+/// Where one pilot sees it and another does not, a shadow's middle crosses the pixel: a
+/// small light's shadow steps there. A large light's penumbra is smooth across many pixels
+/// (the light samples' business); its middle alone is flagged.
+fn shadow_probe(shape: &LightShape) -> Option<Probe> {
     match shape {
-        LightShape::Point(p) => vec![Probe::Point(*p)],
-        LightShape::Direction(d) => vec![Probe::Direction(*d)],
-        LightShape::Sphere(s) => vec![Probe::Sphere {
+        LightShape::Point(p) => Some(Probe::Point(*p)),
+        LightShape::Direction(d) => Some(Probe::Direction(*d)),
+        LightShape::Sphere(s) => Some(Probe::Sphere {
             center: s.center,
             radius: s.radius,
-        }],
+        }),
         LightShape::Quad {
             corner,
             edge_u,
             edge_v,
-        } => {
-            // Corners pulled 5% inwards, so that each lies on the light.
-            let at = |s: f32, t: f32| *corner + s * *edge_u + t * *edge_v;
-            [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
-                .map(|(s, t)| Probe::Point(at(s, t)))
-                .to_vec()
-        }
-        LightShape::Mesh(spheres) if !spheres.is_empty() => {
-            let center = spheres.iter().map(|s| s.center).sum::<Vec3>() / spheres.len() as f32;
-            let radius = (spheres.iter())
-                .map(|s| s.center.distance(center) + s.radius)
-                .fold(0.0, f32::max);
-            vec![Probe::Sphere { center, radius }]
-        }
-        LightShape::Mesh(_) | LightShape::Everywhere => Vec::new(),
+        } => Some(Probe::Point(*corner + 0.5 * (*edge_u + *edge_v))),
+        LightShape::Mesh { point, .. } => point.map(Probe::Point),
+        LightShape::Everywhere => None,
     }
 }
 
-/// What one pilot ray learns.
+/// Which branch of a pilot's chains a ray is on: the reflected (0) and refracted (1) choices
+/// at each bounce so far, and how many, so that the same branch of neighbouring pilots can be
+/// compared.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct BranchCode(u64);
+
+impl BranchCode {
+    const ROOT: BranchCode = BranchCode(1);
+
+    /// The branch one bounce on, `choice` 0 or 1 (a leading 1 bit keeps depths apart; past
+    /// 63 bounces codes wrap, which only makes two branches look alike).
+    fn then(self, choice: u64) -> BranchCode {
+        BranchCode(self.0.wrapping_shl(1) | choice)
+    }
+}
+
+/// The last ray of one branch of a pilot's chains.
 #[derive(Clone, Copy, Debug, PartialEq)]
+struct LastRay {
+    code: BranchCode,
+    direction: Vec3,
+    /// How near it passes a light's bounding sphere ([`gap_to_sphere`]: at most the angle in
+    /// radians; negative inside the sphere; infinite without visible lights).
+    light_gap: f32,
+}
+
+/// What one pilot ray learns.
+#[derive(Clone, Debug, PartialEq)]
 struct Pilot {
-    /// A chain's last ray meets a light, or leaves the scene under a lit environment, or the
-    /// chains were too many to follow.
-    sees_emission: bool,
+    /// The chains' last rays, one per branch followed to its end.
+    last_rays: Vec<LastRay>,
+    /// Last rays that meet a light, or leave the scene under a lit environment.
+    emitting: u32,
     /// The chains were too many to follow.
     tangled: bool,
-    /// A cone (unit axis, half-angle in radians) holding the directions of the chains' last
-    /// rays; `None` when no chain got that far.
-    cone: Option<(Vec3, f32)>,
-    /// The smallest angle between a last ray's direction and a light's bounding sphere seen
-    /// from that ray's origin (negative inside the sphere; infinite without visible lights).
-    light_gap: f32,
     /// The objects met along the chains, in order, hashed.
     shape: ShapeHash,
     /// The shading normal at the first diffuse hit.
@@ -376,10 +393,9 @@ struct Pilot {
 impl Default for Pilot {
     fn default() -> Self {
         Self {
-            sees_emission: false,
+            last_rays: Vec::new(),
+            emitting: 0,
             tangled: false,
-            cone: None,
-            light_gap: f32::INFINITY,
             shape: ShapeHash(0xCBF2_9CE4_8422_2325),
             normal: None,
             visible: 0,
@@ -399,51 +415,77 @@ impl ShapeHash {
     }
 }
 
-/// A cone (unit axis, half-angle) holding the unit directions `dirs`, or `None` for none.
-fn bounding_cone(dirs: impl Iterator<Item = Vec3> + Clone) -> Option<(Vec3, f32)> {
-    let sum: Vec3 = dirs.clone().sum();
-    let axis = sum.try_normalize()?;
-    let half = dirs.map(|d| angle_between(axis, d)).fold(0.0, f32::max);
-    Some((axis, half))
-}
-
-fn angle_between(a: Vec3, b: Vec3) -> f32 {
-    a.dot(b).clamp(-1.0, 1.0).acos()
-}
-
-/// The angle between direction `d` from `o` and the nearest point of `sphere`'s silhouette
-/// seen from `o` (negative when `o` is inside it).
-fn angle_to_sphere(o: Vec3, d: Vec3, sphere: &BoundingSphere) -> f32 {
+/// How near the ray from `o` along unit `d` passes `sphere`: `sin θ − sin α` for a sphere
+/// in front, θ the angle between `d` and the sphere's centre and α its angular radius, which
+/// is never more than the angle `θ − α` between the ray and the sphere's silhouette (so a
+/// test against an angle errs towards flagging), without an inverse sine or cosine per
+/// sphere; `1 − sin α` for a sphere behind (at least a right angle away), −1 inside it.
+fn gap_to_sphere(o: Vec3, d: Vec3, sphere: &BoundingSphere) -> f32 {
     let to = sphere.center - o;
     let dist = to.length();
     if dist <= sphere.radius {
         return -1.0;
     }
-    angle_between(d, to / dist) - (sphere.radius / dist).asin()
+    let sin_radius = sphere.radius / dist;
+    if d.dot(to) <= 0.0 {
+        return 1.0 - sin_radius;
+    }
+    d.cross(to).length() / dist - sin_radius
 }
 
 /// Whether a pixel with these pilots (its centre and corners) samples its emitted light
-/// apart: a pilot sees emission, or a light lies within the pilots' spread (the widest angle
-/// their cones span, with a margin) of a pilot's last ray.
+/// apart. Yes where the chains were too many to follow. No where every last ray of every
+/// pilot meets a light (the pixel lies inside the light's image: each camera sample sees it,
+/// no lottery). Yes where some last ray meets a light (its image's edge crosses the pixel).
+/// Otherwise yes where a light lies within the pixel's spread of a last ray, with a margin:
+/// an image smaller than the pilots' spacing may lie between them. The spread of a branch is
+/// the widest angle between the last rays of that branch across the five pilots; a branch
+/// that some pilot lacks (a silhouette or a total reflection's edge inside the pixel) takes
+/// the widest angle between any two last rays of the pixel.
 fn sees_emission(pilots: &[&Pilot; 5]) -> bool {
-    if pilots.iter().any(|p| p.sees_emission) {
+    if pilots.iter().any(|p| p.tangled) {
         return true;
     }
-    let gap = pilots
+    if pilots
         .iter()
-        .map(|p| p.light_gap)
-        .fold(f32::INFINITY, f32::min);
+        .all(|p| !p.last_rays.is_empty() && p.emitting as usize == p.last_rays.len())
+    {
+        return false;
+    }
+    if pilots.iter().any(|p| p.emitting > 0) {
+        return true;
+    }
+    let rays = || pilots.iter().flat_map(|p| p.last_rays.iter());
+    let gap = rays().map(|r| r.light_gap).fold(f32::INFINITY, f32::min);
     if !gap.is_finite() {
         return false;
     }
-    let cones: Vec<(Vec3, f32)> = pilots.iter().filter_map(|p| p.cone).collect();
-    let mut spread = 0.0f32;
-    for (i, a) in cones.iter().enumerate() {
-        for b in &cones[i..] {
-            spread = spread.max(angle_between(a.0, b.0) + a.1 + b.1);
+    // The pixel's widest angle bounds every branch's spread: most pixels stop here.
+    let whole = widest(rays());
+    for ray in rays().filter(|r| r.light_gap <= SPREAD_MARGIN * whole) {
+        let matched = (pilots.iter()).all(|p| p.last_rays.iter().any(|r| r.code == ray.code));
+        let spread = if matched {
+            widest(rays().filter(|r| r.code == ray.code))
+        } else {
+            whole
+        };
+        if ray.light_gap <= SPREAD_MARGIN * spread {
+            return true;
         }
     }
-    gap <= SPREAD_MARGIN * spread
+    false
+}
+
+/// The widest angle between two of the rays' directions (one inverse cosine, of the smallest
+/// dot product).
+fn widest<'a>(rays: impl Iterator<Item = &'a LastRay> + Clone) -> f32 {
+    let mut least = 1.0f32;
+    for (i, a) in rays.clone().enumerate() {
+        for b in rays.clone().skip(i + 1) {
+            least = least.min(a.direction.dot(b.direction));
+        }
+    }
+    least.clamp(-1.0, 1.0).acos()
 }
 
 /// Whether a pixel with these pilots holds an edge: their chains meet other objects, or their
@@ -466,34 +508,72 @@ fn holds_edge(pilots: &[&Pilot; 5]) -> bool {
 mod tests {
     use super::*;
 
-    fn pilot(cone: (Vec3, f32), gap: f32) -> Pilot {
+    /// A pilot whose last rays are `(branch, angle about y from +z, gap to a light)`.
+    fn pilot(rays: &[(BranchCode, f32, f32)]) -> Pilot {
         Pilot {
-            cone: Some(cone),
-            light_gap: gap,
+            last_rays: (rays.iter())
+                .map(|&(code, a, gap)| LastRay {
+                    code,
+                    direction: Vec3::new(a.sin(), 0.0, a.cos()),
+                    light_gap: gap,
+                })
+                .collect(),
             ..Pilot::default()
         }
     }
+
+    fn five(p: &[Pilot]) -> [&Pilot; 5] {
+        [&p[0], &p[1], &p[2], &p[3], &p[4]]
+    }
+
+    const FAN: [f32; 5] = [-0.01, -0.005, 0.0, 0.005, 0.01];
 
     #[test]
     fn a_light_within_the_pilots_spread_flags_the_pixel() {
         // Five pilots whose last rays fan over 0.02 rad: a light 0.025 rad from the nearest
         // lies within 1.5 × the spread, one 0.05 rad away does not.
-        let fan = |gap: f32| {
-            [-0.01f32, -0.005, 0.0, 0.005, 0.01].map(|a| {
-                pilot(
-                    (Vec3::new(a.sin(), 0.0, a.cos()), 0.0),
-                    gap + (a + 0.01).abs(),
-                )
-            })
+        let root = BranchCode::ROOT;
+        let fan = |gap: f32| -> Vec<Pilot> {
+            FAN.iter()
+                .map(|&a| pilot(&[(root, a, gap + (a + 0.01).abs())]))
+                .collect()
         };
-        let near = fan(0.025);
-        assert!(sees_emission(&[
-            &near[0], &near[1], &near[2], &near[3], &near[4]
-        ]));
-        let far = fan(0.05);
-        assert!(!sees_emission(&[
-            &far[0], &far[1], &far[2], &far[3], &far[4]
-        ]));
+        assert!(sees_emission(&five(&fan(0.025))));
+        assert!(!sees_emission(&five(&fan(0.05))));
+    }
+
+    #[test]
+    fn each_branch_is_compared_with_the_same_branch_of_the_other_pilots() {
+        // Every pilot splits at glass: a reflected fan near 0 rad and a refracted fan near
+        // 1 rad, each 0.02 rad wide; a light 0.1 rad from both is outside either branch's
+        // spread. Where one pilot has no refracted branch (a total reflection's edge inside
+        // the pixel) the spread is the pixel's widest, about a radian, and the light flags.
+        let (r, t) = (BranchCode::ROOT.then(0), BranchCode::ROOT.then(1));
+        let split: Vec<Pilot> = FAN
+            .iter()
+            .map(|&a| pilot(&[(r, a, 0.1), (t, 1.0 + a, 0.1)]))
+            .collect();
+        assert!(!sees_emission(&five(&split)));
+        let mut partial = split.clone();
+        partial[2] = pilot(&[(r, 0.0, 0.1)]);
+        assert!(sees_emission(&five(&partial)));
+    }
+
+    #[test]
+    fn a_pixel_inside_a_lights_image_takes_no_emission_samples() {
+        let root = BranchCode::ROOT;
+        let lit = |emitting: u32| -> Vec<Pilot> {
+            FAN.iter()
+                .map(|&a| Pilot {
+                    emitting,
+                    ..pilot(&[(root, a, -1.0)])
+                })
+                .collect()
+        };
+        assert!(!sees_emission(&five(&lit(1))));
+        let mut edge = lit(1);
+        edge[4].emitting = 0;
+        assert!(sees_emission(&five(&edge)));
     }
 
     #[test]
@@ -504,13 +584,13 @@ mod tests {
             ..Pilot::default()
         };
         assert!(!holds_edge(&[&base; 5]));
-        let mut shadowed = base;
+        let mut shadowed = base.clone();
         shadowed.visible = 0b001;
-        let mut other_object = base;
+        let mut other_object = base.clone();
         other_object.shape.add(7);
-        let mut turned = base;
+        let mut turned = base.clone();
         turned.normal = Some(Vec3::new(0.6, 0.8, 0.0));
-        let mut slightly = base;
+        let mut slightly = base.clone();
         slightly.normal = Some(Vec3::new(0.3, 0.954, 0.0).normalize());
         for (odd, edge) in [
             (shadowed, true),

@@ -390,6 +390,13 @@ impl MeshLight {
         self.power
     }
 
+    /// The centroid of the largest triangle (none for a mesh without area).
+    pub(super) fn largest_triangle_centroid(&self) -> Option<Vec3> {
+        let area = |t: &Triangle| t.edge_1.cross(t.edge_2).length();
+        let largest = (self.triangles.iter()).max_by(|a, b| area(a).total_cmp(&area(b)))?;
+        Some(largest.corner + (largest.edge_1 + largest.edge_2) / 3.0)
+    }
+
     /// A sphere round each triangle, or one round them all past `most` triangles (none for
     /// a mesh without area, which emits nothing).
     pub(super) fn bounding_spheres(&self, most: usize) -> Vec<BoundingSphere> {

@@ -62,8 +62,12 @@ pub enum LightShape {
         edge_v: Vec3,
     },
     /// A mesh light: a sphere round each triangle, or one round them all past
-    /// [`MESH_SPHERES`] triangles (none for a mesh without area, which emits nothing).
-    Mesh(Vec<BoundingSphere>),
+    /// [`MESH_SPHERES`] triangles, and a point of its largest triangle (none of either for a
+    /// mesh without area, which emits nothing).
+    Mesh {
+        spheres: Vec<BoundingSphere>,
+        point: Option<Vec3>,
+    },
     /// The environment: light from every direction.
     Everywhere,
 }
@@ -220,7 +224,10 @@ impl LightSource {
                 edge_u: *edge_u,
                 edge_v: *edge_v,
             },
-            Kind::Mesh(mesh) => LightShape::Mesh(mesh.bounding_spheres(MESH_SPHERES)),
+            Kind::Mesh(mesh) => LightShape::Mesh {
+                spheres: mesh.bounding_spheres(MESH_SPHERES),
+                point: mesh.largest_triangle_centroid(),
+            },
             Kind::Distant(distant) => LightShape::Direction(distant.towards()),
             Kind::Environment(_) => LightShape::Everywhere,
         }
