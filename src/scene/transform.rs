@@ -34,9 +34,12 @@ impl Transform {
     }
 
     /// The unit world normal for object-space normal `n` (not necessarily unit); zero when `n`
-    /// is zero.
+    /// is zero. In f64, so that a normal whose length squared overflows or underflows f32 (a
+    /// file's `vn 0 5e21 1` or `vn 1e-30 0 0`) still has a direction.
     pub(crate) fn normal(&self, n: Vec3) -> Vec3 {
-        (self.normal_map * n).normalize_or_zero()
+        (self.normal_map.as_dmat3() * n.as_dvec3())
+            .normalize_or_zero()
+            .as_vec3()
     }
 }
 
@@ -109,6 +112,19 @@ mod tests {
         let x_then_z = Transform::new(Vec3::ZERO, Vec3::new(90.0, 0.0, 90.0), Vec3::ONE);
         assert!(close(x_then_z.point(Vec3::Y), Vec3::Z));
         assert!(close(x_then_z.point(Vec3::X), Vec3::Y));
+    }
+
+    #[test]
+    fn normals_too_long_or_too_short_for_f32_keep_their_direction() {
+        let t = Transform::new(Vec3::ZERO, Vec3::ZERO, Vec3::ONE);
+        let long = t.normal(Vec3::new(0.0, 5.5e21, 1.0));
+        assert!((long - Vec3::Y).length() < 1e-6, "{long}");
+        let short = t.normal(Vec3::new(1e-30, 0.0, 0.0));
+        assert_eq!(short, Vec3::X);
+        let scaled = Transform::new(Vec3::ZERO, Vec3::ZERO, Vec3::new(1e-20, 1.0, 1.0));
+        let n = scaled.normal(Vec3::new(3e30, 1.0, 0.0));
+        assert!((n - Vec3::X).length() < 1e-6, "{n}");
+        assert_eq!(t.normal(Vec3::ZERO), Vec3::ZERO);
     }
 
     #[test]

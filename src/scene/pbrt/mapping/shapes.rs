@@ -195,7 +195,10 @@ impl Mapper<'_> {
             Some(n) => {
                 let mut out = Vec::with_capacity(n.len());
                 for (i, n) in n.iter().enumerate() {
-                    let w = (normal_matrix * n).normalize_or_zero();
+                    // f64: a length squared past f32's range still has a direction.
+                    let w = (normal_matrix.as_dmat3() * n.as_dvec3())
+                        .normalize_or_zero()
+                        .as_vec3();
                     if w == Vec3::ZERO || !w.is_finite() {
                         return Err(value_error(
                             item,
