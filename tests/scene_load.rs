@@ -669,3 +669,33 @@ fn truncated_obj_files_fail_cleanly() {
         }
     }
 }
+
+/// A vertex normal whose length squared leaves f32's range (the `obj` fuzz target found
+/// `vn 0 5555555555555555555550 1`, which became zero and failed the mesh's own checks) keeps
+/// its direction, as does one too short to square.
+#[test]
+fn vertex_normals_past_f32_range_keep_their_direction() {
+    let folder = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        repo("tests/fixtures/meshes/materials.mtl"),
+        folder.path().join("materials.mtl"),
+    )
+    .unwrap();
+    let obj = "mtllib materials.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n\
+               vn 0 5555555555555555555550 1\nvn 1e-30 0 0\nvn 0 0 1\n\
+               usemtl paint\nf 1//1 2//2 3//3\n";
+    std::fs::write(folder.path().join("big-normals.obj"), obj).unwrap();
+    let scene = fixture_scene("[[objects]]\ntype = \"mesh\"\nfile = \"big-normals.obj\"\n");
+    let (loaded, _) =
+        scene::parse(&scene, &folder.path().join("scene.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let mesh = meshes(&loaded)
+        .into_iter()
+        .find(|m| m.normals.is_some())
+        .expect("the mesh keeps its vertex normals");
+    let normals = mesh.normals.as_ref().unwrap();
+    assert_eq!(normals.len(), 3);
+    for n in normals {
+        assert!((n.length() - 1.0).abs() < 1e-5, "{n}");
+    }
+    assert!(normals[0].y > 0.999 && normals[1].x > 0.999, "{normals:?}");
+}
