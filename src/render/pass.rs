@@ -22,7 +22,7 @@ use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
 use super::integrator::Emission;
 use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
 use super::pilots::PixelPlan;
-use super::schedule::{Schedule, fixed_radius, pass_estimator};
+use super::schedule::{Schedule, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::kernel::RadialKernel;
 use crate::estimate::precomputed::PrecomputedIrradiance;
@@ -104,7 +104,7 @@ impl BaseRadii {
                 Some(r) => Some(r),
                 None => {
                     let r = k_equivalent_radius(map, e.k);
-                    if r.is_none() && fixed_radius(e.estimator) {
+                    if r.is_none() && e.estimator.is_fixed_radius() {
                         return Err(EstimateError::DegenerateMap);
                     }
                     r

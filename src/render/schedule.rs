@@ -9,7 +9,7 @@
 //! After `i` passes `r²(i) ∝ i^(α−1)`: the bias of a smooth density (∝ r²) falls like
 //! `i^(α−1)` and the variance of the passes' mean like `i^(−α)`, so both vanish.
 
-use crate::estimate::{EstimatorKind, EstimatorSettings};
+use crate::estimate::EstimatorSettings;
 use crate::sampling::pass_seed;
 
 /// Knaus and Zwicker's usual α.
@@ -46,10 +46,6 @@ impl Schedule {
     }
 }
 
-pub fn fixed_radius(kind: EstimatorKind) -> bool {
-    kind.is_fixed_radius()
-}
-
 /// The estimate's settings in pass `pass`, from the run's settings and the base radius pass 0
 /// resolved (`--radius`, else its map's k-equivalent radius). The fixed-radius estimates scale
 /// every radius from pass 0 on; the k-NN estimates keep pass 0 as the one-shot estimate and
@@ -62,7 +58,7 @@ pub fn pass_estimator(
 ) -> EstimatorSettings {
     let scale = schedule.radius_scale(pass);
     let mut e = settings.clone();
-    if fixed_radius(e.estimator) {
+    if e.estimator.is_fixed_radius() {
         e.radius = base_radius.map(|r| r * scale).or(e.radius);
         e.gradient_radius = e.gradient_radius.map(|r| r * scale);
         e.smoothing_radius = e.smoothing_radius.map(|r| r * scale);

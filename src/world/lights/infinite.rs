@@ -112,12 +112,12 @@ impl Distant {
         self.irradiance * (PI * self.scene.radius * self.scene.radius)
     }
 
-    /// Light from the one direction it comes from, unoccluded to infinity.
     /// The unit direction towards the light.
     pub(super) fn towards(&self) -> Vec3 {
         -self.direction
     }
 
+    /// Light from the one direction it comes from, unoccluded to infinity.
     pub(super) fn incident(&self) -> IncidentSample {
         IncidentSample {
             direction: -self.direction,
