@@ -30,6 +30,9 @@ pub enum Stream {
     EyeSequences = 5,
     /// Emission samples of a pixel (`render::emission`): their Sobol scrambles and PCG streams.
     EmissionSamples = 6,
+    /// Pilot caustic paths traced once per render to learn where aimed photons do most good
+    /// (`photon::guide`).
+    CausticPilots = 7,
 }
 
 /// The seed of pass `pass` of a progressive run. Pass 0 keeps the run's own seed, so a one-pass
@@ -322,6 +325,22 @@ impl ConeFrame {
         self.t * (sin_t * cos) + self.b * (sin_t * sin) + self.axis * cos_t
     }
 
+    /// The numbers [`ConeFrame::sample`] turns into `direction`, a unit vector in the cone:
+    /// its inverse, up to rounding (clamped into [0, 1)² for directions on the rim).
+    #[inline(always)]
+    pub fn coordinates(&self, direction: Vec3) -> (f32, f32) {
+        let height = 1.0 - self.cos_max;
+        let (x, y) = (direction.dot(self.t), direction.dot(self.b));
+        // 1 − cos θ from sin² θ: accurate in a cone a hair wide, where 1 − d·axis is rounding.
+        let sin2 = x * x + y * y;
+        let versine = sin2 / (1.0 + (1.0 - sin2).max(0.0).sqrt());
+        let u0 = if height > 0.0 { versine / height } else { 0.0 };
+        let turns = y.atan2(x) * (0.5 / PI);
+        let u1 = if turns < 0.0 { turns + 1.0 } else { turns };
+        let below_one = 1.0 - f32::EPSILON / 2.0;
+        (u0.clamp(0.0, below_one), u1.clamp(0.0, below_one))
+    }
+
     pub fn axis(&self) -> Vec3 {
         self.axis
     }
@@ -344,6 +363,37 @@ pub fn cone_solid_angle(cos_max: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `coordinates` undoes `sample` for cones from a hair's width to a hemisphere: the numbers
+    /// come back, and where the cone is so narrow that `sample` itself rounds them (cos θ within
+    /// an ulp of 1), they give back the same direction.
+    #[test]
+    fn cone_coordinates_invert_the_cone_sample() {
+        let mut rng = Rng::for_index(3, Stream::Distribution, 0);
+        for &cos_max in &[0.999_99f32, 0.99, 0.5, 0.0] {
+            let axis = uniform_sphere(rng.next_2d());
+            let frame = ConeFrame::new(axis, cos_max);
+            let half_angle = cos_max.acos();
+            for _ in 0..2000 {
+                let u = rng.next_2d();
+                let d = frame.sample(u);
+                let back = frame.coordinates(d);
+                let again = frame.sample(back);
+                // The chord, not acos of a dot product a rounding away from 1.
+                let apart = (d - again).length();
+                assert!(
+                    apart < 2e-3 * half_angle + 1e-6,
+                    "{cos_max}: {u:?} came back as {back:?}, {apart} rad away"
+                );
+                if cos_max <= 0.99 {
+                    // Turns wrap: 0.999.. and 0.0 are neighbours; at the apex they mean nothing.
+                    let turn = (back.1 - u.1).abs().min(1.0 - (back.1 - u.1).abs());
+                    assert!((back.0 - u.0).abs() < 1e-4, "{cos_max}: {u:?} -> {back:?}");
+                    assert!(turn < 1e-3 || u.0 < 1e-3, "{cos_max}: {u:?} -> {back:?}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn pass_zero_keeps_the_seed_and_other_passes_differ() {

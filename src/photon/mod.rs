@@ -2,6 +2,7 @@
 //! map that pairs them ([`map`]). Photon *tracing* lives in [`tracer`]; nothing here calls
 //! Embree except through [`crate::world`].
 
+pub mod guide;
 pub mod kdtree;
 pub mod map;
 pub mod record;

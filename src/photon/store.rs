@@ -11,7 +11,7 @@
 //! | 12 | 4 | number of maps n (u32, 0 to 2) |
 //! | 16 | 8 | scene fingerprint (u64, [`scene_fingerprint`]) |
 //! | 24 | 8 | seed (u64) |
-//! | 32 | 32 n | per map: kind (u32: 0 caustic, 1 global, 2 global with direct hits), 0 (u32), photons asked for (u64), paths emitted (u64), photons stored (u64) |
+//! | 32 | 32 n | per map: kind (u32: 0 caustic, 1 global, 2 global with direct hits), the caustic guide's pilot paths (u32; 0: unguided, as every file written before the guide has it), photons asked for (u64), paths emitted (u64), photons stored (u64) |
 //! | … | 20 per photon | each map's photons in turn: position x, y, z (f32 bits), power (RGBE, 4 bytes), direction and normal (octahedral, 2 bytes each) |
 //! | end − 8 | 8 | checksum: FNV-1a 64 of every byte before it |
 //!
@@ -50,6 +50,9 @@ pub struct MapInfo {
     pub kind: MapKind,
     /// Photons the pass was asked to store (`--caustic-photons` / `--global-photons`).
     pub target: u64,
+    /// Pilot paths of the caustic guide its photons were drawn through (`--guide-paths`; 0:
+    /// unguided, and always 0 for a global map).
+    pub guide: u32,
 }
 
 /// A map read from a file.
@@ -195,7 +198,7 @@ pub fn write(
         header.extend_from_slice(&seed.to_le_bytes());
         for (info, map) in maps {
             header.extend_from_slice(&kind_code(info.kind).to_le_bytes());
-            header.extend_from_slice(&0u32.to_le_bytes());
+            header.extend_from_slice(&info.guide.to_le_bytes());
             header.extend_from_slice(&info.target.to_le_bytes());
             header.extend_from_slice(&map.emitted.to_le_bytes());
             header.extend_from_slice(&(map.len() as u64).to_le_bytes());
@@ -289,8 +292,9 @@ pub fn read(path: &Path) -> Result<PhotonFile, StoreError> {
         hash.update(&h);
         let long = |i: usize| u64::from_le_bytes(h[i..i + 8].try_into().expect("8 bytes"));
         let code = u32::from_le_bytes(h[0..4].try_into().expect("4 bytes"));
-        // (kind code, target, emitted, stored); the kind is checked after the checksum.
-        headers.push((code, long(8), long(16), long(24)));
+        let guide = u32::from_le_bytes(h[4..8].try_into().expect("4 bytes"));
+        // (kind code, guide, target, emitted, stored); the kind is checked after the checksum.
+        headers.push((code, guide, long(8), long(16), long(24)));
     }
     let expected = headers
         .iter()
@@ -342,7 +346,7 @@ pub fn read(path: &Path) -> Result<PhotonFile, StoreError> {
 
     // The checksum holds; now the contents must make sense.
     let mut maps: Vec<StoredMap> = Vec::new();
-    for ((code, target, emitted, stored), photons) in headers.into_iter().zip(photon_lists) {
+    for ((code, guide, target, emitted, stored), photons) in headers.into_iter().zip(photon_lists) {
         let kind =
             kind_from_code(code).ok_or_else(|| corrupt(format!("unknown map kind {code}")))?;
         if maps
@@ -364,7 +368,11 @@ pub fn read(path: &Path) -> Result<PhotonFile, StoreError> {
             )));
         }
         maps.push(StoredMap {
-            info: MapInfo { kind, target },
+            info: MapInfo {
+                kind,
+                target,
+                guide,
+            },
             map: PhotonMap::build(photons, emitted),
         });
     }
@@ -426,6 +434,13 @@ impl PhotonFile {
                     have.info.target,
                     want.target,
                     flag = count_flag(want.kind)
+                )));
+            }
+            if have.info.guide != want.guide {
+                return Err(mismatch(format!(
+                    "its {name} map was traced with --guide-paths {}, this render uses \
+                     --guide-paths {} (the guide changes which photons are traced)",
+                    have.info.guide, want.guide
                 )));
             }
             if let (MapKind::Global { with_direct: had }, MapKind::Global { with_direct: wants }) =

@@ -40,10 +40,10 @@ const MAX_BOUNCES: u32 = 32;
 /// A photon as traced, before the flux is divided by the number of paths emitted (32 bytes:
 /// the directions are encoded as stored, since their encoding does not depend on that number).
 #[derive(Clone, Copy)]
-struct TracedPhoton {
-    position: Vec3,
-    flux: Vec3,
-    directions: EncodedDirections,
+pub(super) struct TracedPhoton {
+    pub(super) position: Vec3,
+    pub(super) flux: Vec3,
+    pub(super) directions: EncodedDirections,
     /// The path that stored it, counted from the first path of its chunk: where a pass that
     /// reaches its target stops counting.
     path_in_chunk: u32,
@@ -93,8 +93,8 @@ impl LightChooser {
 }
 
 /// How the paths of one pass start: which light, aimed where, with which random numbers.
-struct Emitter<'w> {
-    world: &'w World,
+pub(super) struct Emitter<'w> {
+    pub(super) world: &'w World,
     chooser: LightChooser,
     /// One per light, in the scene's order.
     lights: Vec<LightEmitter>,
@@ -103,34 +103,63 @@ struct Emitter<'w> {
 }
 
 /// The start of a path that carries flux.
-struct PathStart {
+pub(super) struct PathStart {
+    /// The light it left, in the scene's order.
+    pub(super) light: usize,
     rng: Rng,
     origin: Vec3,
-    direction: Vec3,
+    pub(super) direction: Vec3,
     flux: Vec3,
 }
 
 impl<'w> Emitter<'w> {
+    /// A pass's emitter: caustic photons aimed at the targets, through the world's caustic
+    /// guide where it has one.
     fn new(world: &'w World, kind: MapKind, seed: u64) -> Option<Self> {
-        let (aim, stream) = match kind {
-            MapKind::Caustic => (world.caustic_targets.as_slice(), Stream::CausticPhotons),
-            MapKind::Global { .. } => (&[][..], Stream::GlobalPhotons),
+        match kind {
+            MapKind::Caustic => Self::with(world, Stream::CausticPhotons, seed, true),
+            MapKind::Global { .. } => Self::with(world, Stream::GlobalPhotons, seed, false),
+        }
+    }
+
+    /// The caustic guide's pilot paths: aimed, never guided, on their own stream.
+    pub(super) fn pilots(world: &'w World, seed: u64) -> Option<Self> {
+        Self::with(world, Stream::CausticPilots, seed, false)
+    }
+
+    fn with(world: &'w World, stream: Stream, seed: u64, guided: bool) -> Option<Self> {
+        let aim = match stream {
+            Stream::GlobalPhotons => &[][..],
+            _ => world.caustic_targets.as_slice(),
         };
+        let lights = (world.light_sources.iter().enumerate())
+            .map(|(l, light)| {
+                let mut emitter = LightEmitter::new(light, aim);
+                if let (true, Some(cells)) = (guided, world.caustic_guide.get(l).cloned().flatten())
+                {
+                    emitter.guide(cells);
+                }
+                emitter
+            })
+            .collect();
         Some(Self {
             world,
             chooser: LightChooser::new(world)?,
-            lights: (world.light_sources.iter())
-                .map(|light| LightEmitter::new(light, aim))
-                .collect(),
+            lights,
             streams: StreamSeed::new(seed, stream),
             ray_epsilon: world.ray_epsilon(),
         })
     }
 
+    /// Light `l`'s emitter.
+    pub(super) fn light(&self, l: usize) -> &LightEmitter {
+        &self.lights[l]
+    }
+
     /// Path `index`: its generator (for the rest of the path) and first ray, or `None` when it
     /// carries no flux and so casts no ray.
     #[inline(always)]
-    fn start(&self, index: u64) -> Option<PathStart> {
+    pub(super) fn start(&self, index: u64) -> Option<PathStart> {
         let mut rng = self.streams.rng(index);
         let l = self.chooser.pick(rng.next_f32());
         let Emission {
@@ -140,6 +169,7 @@ impl<'w> Emitter<'w> {
         } = self.lights[l].emit(&mut rng);
         let flux = flux / self.chooser.pdf[l];
         (flux.max_element() > 0.0).then(|| PathStart {
+            light: l,
             rng,
             // Just off the light: the first ray would otherwise hit the light's own surface.
             origin: origin + direction * self.ray_epsilon,
@@ -381,11 +411,11 @@ fn trace_chunk(
 }
 
 /// Where a path reports each ray it casts: nowhere when tracing, a list for benchmarks.
-trait RayLog {
+pub(super) trait RayLog {
     fn cast(&mut self, origin: Vec3, direction: Vec3);
 }
 
-struct NoRayLog;
+pub(super) struct NoRayLog;
 
 impl RayLog for NoRayLog {
     #[inline(always)]
@@ -426,7 +456,7 @@ pub fn path_rays(
 }
 
 /// A path on its way: its next ray and what it carries.
-struct LivePath {
+pub(super) struct LivePath {
     path_in_chunk: u32,
     rng: Rng,
     origin: Vec3,
@@ -438,7 +468,7 @@ struct LivePath {
 }
 
 impl LivePath {
-    fn new(path_in_chunk: u32, start: PathStart) -> Self {
+    pub(super) fn new(path_in_chunk: u32, start: PathStart) -> Self {
         Self {
             path_in_chunk,
             rng: start.rng,
@@ -454,7 +484,7 @@ impl LivePath {
 
 /// Follows one path until it ends, appending the photons it stores to `stored`; returns the
 /// number of rays cast.
-fn trace_path(
+pub(super) fn trace_path(
     world: &World,
     kind: MapKind,
     mut path: LivePath,

@@ -56,6 +56,18 @@ impl PinholeCamera {
         self.origin
     }
 
+    /// Whether `point` lies in the camera's field of view (in front of it, within the image's
+    /// bounds; not whether something hides it).
+    pub fn sees(&self, point: Vec3) -> bool {
+        let d = point - self.origin;
+        let depth = d.dot(self.forward);
+        let aspect = self.width as f32 / self.height as f32;
+        let u = d.dot(self.right) / (depth * self.tan_half * aspect);
+        let v = d.dot(self.up) / (depth * self.tan_half);
+        // A NaN depth (a point at infinity) fails every comparison.
+        depth > 0.0 && u.abs() <= 1.0 && v.abs() <= 1.0
+    }
+
     pub fn width(&self) -> usize {
         self.width as usize
     }

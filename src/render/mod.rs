@@ -10,6 +10,7 @@
 
 pub mod args;
 pub mod camera;
+pub mod caustic_guide;
 pub mod emission;
 pub mod film;
 pub mod film_file;

@@ -75,6 +75,10 @@ pub struct RenderSettings {
     /// took `spp` everywhere.
     #[serde(default)]
     pub edge_samples: u32,
+    /// Pilot paths of the caustic guide learnt once per render (`photon::guide`); 0: photons
+    /// spread uniformly over their cones. Films written before it existed were unguided.
+    #[serde(default)]
+    pub guide_paths: u64,
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
     pub estimator: EstimatorSettings,
@@ -150,6 +154,7 @@ pub fn wanted_maps(settings: &RenderSettings, world: &World) -> Vec<crate::photo
         wanted.push(MapInfo {
             kind: MapKind::Caustic,
             target: settings.caustic_photons as u64,
+            guide: u32::try_from(settings.guide_paths).expect("--guide-paths is checked"),
         });
     }
     if settings.global_photons > 0 {
@@ -158,6 +163,7 @@ pub fn wanted_maps(settings: &RenderSettings, world: &World) -> Vec<crate::photo
                 with_direct: settings.final_gather > 0,
             },
             target: settings.global_photons as u64,
+            guide: 0,
         });
     }
     wanted

@@ -275,6 +275,40 @@ impl PreparedUnion {
     pub fn sample(&self, rng: &mut Rng) -> (Vec3, f32) {
         self.union.sample_with(rng, |k| self.frames[k])
     }
+
+    /// Number of cones.
+    pub fn len(&self) -> usize {
+        self.union.len
+    }
+
+    /// Always false: a union has at least one cone.
+    pub fn is_empty(&self) -> bool {
+        self.union.len == 0
+    }
+
+    /// The frame of cone `k`.
+    #[inline(always)]
+    pub fn frame(&self, k: usize) -> &ConeFrame {
+        &self.frames[..self.union.len][k]
+    }
+
+    /// Whether cone `k` holds the unit `direction`.
+    #[inline(always)]
+    pub fn holds(&self, k: usize, direction: Vec3) -> bool {
+        let (axis, cos_max) = self.union.cone(k);
+        direction.dot(axis) >= cos_max
+    }
+
+    /// Solid angle of cone `k`.
+    pub fn solid_angle_of(&self, k: usize) -> f32 {
+        cone_solid_angle(self.union.cone(k).1)
+    }
+
+    /// The cones' solid angles summed (the reciprocal of the union's density where no two
+    /// overlap).
+    pub fn solid_angle_of_all(&self) -> f32 {
+        self.union.solid_angle()
+    }
 }
 
 #[cfg(test)]

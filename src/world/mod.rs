@@ -6,12 +6,14 @@
 
 pub mod aim;
 pub mod aim_grid;
+pub mod aim_guide;
 pub mod lights;
 
 use crate::embree::{self, EmbreeError};
 use crate::scene::{Light, Material, SceneDescription, Shape, TriangleMesh};
 use glam::Vec3;
 use lights::LightSource;
+use std::sync::Arc;
 
 /// How a hit on one Embree geometry finds its normals: everything resolving a hit reads, in
 /// one place per geometry id (not a kind, then the scene's shape or light, then its normals).
@@ -160,6 +162,9 @@ pub struct World {
     /// Where caustic photons are aimed: a sphere around each mirror and glass object, or one
     /// around them all past [`aim::MAX_TARGETS`]; empty when the scene has none.
     pub caustic_targets: Vec<BoundingSphere>,
+    /// How each light spreads its aimed caustic photons over its cones, learnt once per render
+    /// (`photon::guide`), by light in the scene's order; empty or `None`: uniformly.
+    pub caustic_guide: Vec<Option<Arc<aim_guide::ConeCells>>>,
     /// Diagonal of the scene's bounding box: sets the ray epsilon and the default radii.
     pub scale: f32,
     /// Around every shape and light with a place: where the lights at infinity send photons from.
@@ -312,6 +317,7 @@ impl World {
             surfaces,
             normals,
             caustic_targets,
+            caustic_guide: Vec::new(),
             scale,
             bounds,
             light_sources,

@@ -20,10 +20,12 @@ fn map(n: u32, emitted: u64) -> PhotonMap {
 const CAUSTIC: MapInfo = MapInfo {
     kind: MapKind::Caustic,
     target: 500,
+    guide: 0,
 };
 const GLOBAL: MapInfo = MapInfo {
     kind: MapKind::Global { with_direct: true },
     target: 300,
+    guide: 0,
 };
 
 /// A file with a 500-photon caustic map and a 300-photon global map.
@@ -213,6 +215,10 @@ fn store_refuses_maps_made_for_another_render() {
         target: 501,
         ..CAUSTIC
     };
+    let guided = MapInfo {
+        guide: 50_000,
+        ..CAUSTIC
+    };
     let cases: &[(u64, u64, &[MapInfo], &str)] = &[
         (43, 7, &[CAUSTIC, GLOBAL], "another scene"),
         (
@@ -228,6 +234,12 @@ fn store_refuses_maps_made_for_another_render() {
             "--caustic-photons 500, this render asks for --caustic-photons 501",
         ),
         (42, 7, &[CAUSTIC, global_off], "--final-gather"),
+        (
+            42,
+            7,
+            &[guided, GLOBAL],
+            "--guide-paths 0, this render uses --guide-paths 50000",
+        ),
         (42, 7, &[CAUSTIC], "holds a global map"),
         (42, 7, &[GLOBAL], "holds a caustic map"),
     ];
@@ -238,6 +250,12 @@ fn store_refuses_maps_made_for_another_render() {
         assert!(message.contains(fragment), "{message}");
         assert!(message.contains("maps.photons"), "{message}");
     }
+    // A guided map keeps its pilot count and fits only a render with the same.
+    write(&path, 42, 7, &[(guided, &map(10, 20))]).unwrap();
+    let file = read(&path).unwrap();
+    assert_eq!(file.maps[0].info, guided);
+    file.check_fits(42, 7, &[guided]).unwrap();
+    assert!(file.check_fits(42, 7, &[CAUSTIC]).is_err());
     write(&path, 42, 7, &[]).unwrap();
     let e = read(&path)
         .unwrap()

@@ -16,8 +16,9 @@ use crate::sampling::{
 };
 use crate::scene::TriangleMesh;
 use crate::world::BoundingSphere;
-use crate::world::aim::{PreparedUnion, UnionOfCones, cone_towards};
+use crate::world::aim::{UnionOfCones, cone_towards};
 use crate::world::aim_grid::{AimGrid, CellDraw};
+use crate::world::aim_guide::AimedCones;
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -133,11 +134,19 @@ pub(super) fn light_to_target_cone(
 pub(super) struct SphereEmitter {
     center: Vec3,
     radius: f32,
-    toward_targets: Option<PreparedUnion>,
+    toward_targets: Option<AimedCones>,
     power: Vec3,
 }
 
 impl SphereEmitter {
+    pub(super) fn cones_mut(&mut self) -> Option<&mut AimedCones> {
+        self.toward_targets.as_mut()
+    }
+
+    pub(super) fn cones(&self) -> Option<&AimedCones> {
+        self.toward_targets.as_ref()
+    }
+
     pub(super) fn new(center: Vec3, radius: f32, power: Vec3, aim: &[BoundingSphere]) -> Self {
         let cones: Option<Vec<_>> = (aim.iter())
             .map(|target| light_to_target_cone(target, center, radius))
@@ -147,7 +156,7 @@ impl SphereEmitter {
             radius,
             toward_targets: cones
                 .and_then(UnionOfCones::new)
-                .map(UnionOfCones::prepared),
+                .map(|union| AimedCones::new(union.prepared())),
             power,
         }
     }

@@ -15,6 +15,7 @@ mod point;
 mod tests;
 
 use super::BoundingSphere;
+use super::aim_guide::{AimedCones, ConeCells};
 use crate::sampling::Rng;
 use crate::scene::Light;
 use glam::Vec3;
@@ -317,6 +318,31 @@ impl LightEmitter {
             source,
             aim: aim.to_vec(),
         }
+    }
+
+    /// The cones this light aims its photons through when they come from one point (a point,
+    /// spot or sphere light; the sphere's from its centre): what a caustic guide
+    /// ([`super::aim_guide`]) is learnt on and steers. `None` for lights aimed otherwise (per
+    /// cell of a quad, per triangle, from infinity) or not aimed at all.
+    pub fn aimed_cones(&self) -> Option<&AimedCones> {
+        match &self.source {
+            Source::Point(point) => point.cones(),
+            Source::Spot(spot) => spot.cones(),
+            Source::Sphere(sphere) => sphere.cones(),
+            Source::Quad(_) | Source::Mesh(_) | Source::Distant(_) | Source::Environment(_) => None,
+        }
+    }
+
+    /// Guides this light's aimed photons by `cells`, learnt on its [`LightEmitter::aimed_cones`];
+    /// false (and unguided) for a light without them.
+    pub fn guide(&mut self, cells: Arc<ConeCells>) -> bool {
+        let cones = match &mut self.source {
+            Source::Point(point) => point.cones_mut(),
+            Source::Spot(spot) => spot.cones_mut(),
+            Source::Sphere(sphere) => sphere.cones_mut(),
+            Source::Quad(_) | Source::Mesh(_) | Source::Distant(_) | Source::Environment(_) => None,
+        };
+        cones.map(|c| c.guide(cells)).is_some()
     }
 
     /// One photon, drawn from `rng`.

@@ -13,7 +13,8 @@ use super::{Emission, IncidentSample};
 use crate::sampling::{Rng, basis, cone_solid_angle, sin_cos_turns, uniform_sphere};
 use crate::scene::SpotFalloff;
 use crate::world::BoundingSphere;
-use crate::world::aim::{PreparedUnion, UnionOfCones, cone_towards};
+use crate::world::aim::{UnionOfCones, cone_towards};
+use crate::world::aim_guide::AimedCones;
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -36,14 +37,22 @@ pub(super) fn point_incident(position: Vec3, power: Vec3, x: Vec3) -> Option<Inc
 #[derive(Clone, Debug)]
 pub(super) struct PointEmitter {
     position: Vec3,
-    cones: Option<PreparedUnion>,
+    cones: Option<AimedCones>,
     /// Flux of a photon standing for one steradian when aimed, for the whole sphere when not.
     flux: Vec3,
 }
 
 impl PointEmitter {
+    pub(super) fn cones_mut(&mut self) -> Option<&mut AimedCones> {
+        self.cones.as_mut()
+    }
+
+    pub(super) fn cones(&self) -> Option<&AimedCones> {
+        self.cones.as_ref()
+    }
+
     pub(super) fn new(position: Vec3, power: Vec3, aim: &[BoundingSphere]) -> Self {
-        let cones = UnionOfCones::towards(aim, position).map(UnionOfCones::prepared);
+        let cones = UnionOfCones::towards(aim, position).map(|u| AimedCones::new(u.prepared()));
         Self {
             position,
             flux: if cones.is_some() {
@@ -200,10 +209,18 @@ fn band_position(falloff: SpotFalloff, w: f32) -> f32 {
 pub(super) struct SpotEmitter {
     spot: Spot,
     /// The cones towards the targets that meet the spot's cone, when they are narrower than it.
-    toward_targets: Option<PreparedUnion>,
+    toward_targets: Option<AimedCones>,
 }
 
 impl SpotEmitter {
+    pub(super) fn cones_mut(&mut self) -> Option<&mut AimedCones> {
+        self.toward_targets.as_mut()
+    }
+
+    pub(super) fn cones(&self) -> Option<&AimedCones> {
+        self.toward_targets.as_ref()
+    }
+
     pub(super) fn new(spot: &Spot, aim: &[BoundingSphere]) -> Self {
         let cone_half_angle = spot.cos_cone.clamp(-1.0, 1.0).acos();
         let meets_the_spot = |&(axis, cos_max): &(Vec3, f32)| {
@@ -219,7 +236,7 @@ impl SpotEmitter {
             .map(|cones| cones.into_iter().filter(meets_the_spot))
             .and_then(UnionOfCones::new)
             .filter(|union| union.solid_angle() < cone_solid_angle(spot.cos_cone))
-            .map(UnionOfCones::prepared);
+            .map(|union| AimedCones::new(union.prepared()));
         Self {
             spot: spot.clone(),
             toward_targets,
