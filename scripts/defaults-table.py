@@ -2,7 +2,7 @@
 """Measures render settings against references, for choosing the defaults (BENCHMARKS.md,
 "Whole scenes: the defaults").
 
-    scripts/defaults-table.py [--repeat N] DIR OLD_DPM NEW_DPM SCENE[,SCENE...] [CONFIG ...]
+    scripts/defaults-table.py [--repeat N] [--seed S] DIR OLD_DPM NEW_DPM SCENE[,SCENE...] [CONFIG ...]
 
 DIR holds SCENE.toml and SCENE-ref.pfm for each scene (the references: long progressive runs,
 see BENCHMARKS.md). OLD_DPM renders "today's default" (its own defaults, no flags); NEW_DPM
@@ -14,7 +14,9 @@ default.
 
 Errors do not depend on the machine (same seed, same image), times do: with `--repeat N` every
 run is made N times, in turn (old default, then each configuration, N rounds), and each pass's
-completion time is the median of its N runs. The time to the old default's error is
+completion time is the median of its N runs. `--seed S` renders every run, the old default's
+too, with `--seed S` (default: each binary's default seed, 1), to see how far a ratio moves
+with the random numbers. The time to the old default's error is
 interpolated between the two passes that straddle it (linearly in log error), so that it does
 not jump by a whole pass. Runs one at a time; nothing else should run on the machine.
 """
@@ -65,9 +67,13 @@ def time_to(curve, target):
 
 def main():
     args = sys.argv[1:]
-    repeat = 1
-    if args[:1] == ["--repeat"]:
-        repeat, args = int(args[1]), args[2:]
+    repeat, seed = 1, []
+    while args[:1] in (["--repeat"], ["--seed"]):
+        if args[0] == "--repeat":
+            repeat = int(args[1])
+        else:
+            seed = ["--seed", args[1]]
+        args = args[2:]
     if len(args) < 4:
         print(__doc__)
         sys.exit(2)
@@ -84,12 +90,12 @@ def main():
         runs = {label: [] for label, _ in configs}
         olds = []
         for _ in range(repeat):
-            olds.append(render(old, scene, folder / f"{name}-old.pfm", []))
+            olds.append(render(old, scene, folder / f"{name}-old.pfm", seed))
             t0 = statistics.median(c[-1][0] for c in olds)
             for label, flags in configs:
                 tag = label.replace(" ", "-")
                 extra = [] if "--passes" in flags else ["--time", f"{2 * t0:.3f}"]
-                runs[label].append(render(new, scene, folder / f"{name}-{tag}.pfm", flags + extra))
+                runs[label].append(render(new, scene, folder / f"{name}-{tag}.pfm", seed + flags + extra))
         base = median_curve(olds)
         t0, e0 = base[-1]
         print(f"| {name} | old default | {len(base)} | {e0:.5f} | 1 | {t0:.2f} | 1 |")

@@ -198,6 +198,8 @@ fn bad_parameters_exit_2_naming_the_flag() {
         (&["--light-samples", "-1"], &["'-1'", "--light-samples"]),
         (&["--irradiance-stride", "1000000"], &["--irradiance-stride 1000000", "0 (off)"]),
         (&["--irradiance-stride", "-4"], &["'-4'", "--irradiance-stride"]),
+        (&["--guide-paths", "200000000"], &["--guide-paths 200000000", "0 (off) to 100000000"]),
+        (&["--guide-paths", "-1"], &["'-1'", "--guide-paths"]),
         (&["--caustic-photons", "-5"], &["'-5'", "--caustic-photons"]),
         (&["--caustic-photons", "lots"], &["'lots'", "--caustic-photons"]),
         (&["--estimator", "magic"], &["'magic'", "--estimator"]),

@@ -10,7 +10,7 @@
 use super::tracer::{Emitter, NoRayLog, TracedPhoton, trace_path};
 use super::{KdTree, Neighbours, Photon};
 use crate::world::World;
-use crate::world::aim_guide::{ConeCells, GuideTally};
+use crate::world::aim_guide::{CELLS, ConeCells, GuideTally};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -21,6 +21,10 @@ const NEIGHBOURS: usize = 16;
 /// The farthest a landing's neighbours are looked for, as a fraction of the scene's diagonal:
 /// a lone photon on a wide floor is as dim as the pilots can tell at that.
 const REACH: f32 = 0.01;
+
+/// Pilot paths a cone cell needs: a cell's mean worth from about this many paths (half of
+/// them or fewer land) is good to a few percent.
+pub const PILOTS_PER_CELL: u64 = 128;
 
 /// Paths per parallel task.
 const CHUNK: u64 = 4096;
@@ -52,8 +56,11 @@ impl LearntGuide {
 }
 
 /// Traces `paths` pilot caustic paths (aimed, unguided), has `worth` value their landings
-/// (one number per landing, ≥ 0; the pilots' photons give the caustic light there), and learns each aimed light's cells from them. No guide for a
-/// scene without caustic targets or lights aimed from one point.
+/// (one number per landing, ≥ 0; the pilots' photons give the caustic light there), and
+/// learns each aimed light's cells from them. At most [`PILOTS_PER_CELL`] paths a cell of the
+/// aimed lights' cones are traced: a light aimed at two spheres has 128 cells, and 50,000
+/// pilots would cost it a sixth of a pass for nothing more. No guide for a scene without
+/// caustic targets or lights aimed from one point.
 pub fn learn_caustic_guide(
     world: &World,
     seed: u64,
@@ -61,7 +68,6 @@ pub fn learn_caustic_guide(
     worth: impl FnOnce(&[Landing], &PilotPhotons) -> Vec<f64>,
 ) -> LearntGuide {
     let none = LearntGuide::default();
-
     if world.caustic_targets.is_empty() || paths == 0 {
         return none;
     }
@@ -74,6 +80,11 @@ pub fn learn_caustic_guide(
     if !aimed.contains(&true) {
         return none;
     }
+    let cells: usize = (0..aimed.len())
+        .filter_map(|l| emitter.light(l).aimed_cones())
+        .map(|cones| cones.union().len() * CELLS)
+        .sum();
+    let paths = paths.min(PILOTS_PER_CELL * cells as u64);
     // Per path: its light, first direction and the photon it stored, in path order.
     let traced: Vec<(usize, Vec3, Option<TracedPhoton>)> = (0..paths.div_ceil(CHUNK))
         .into_par_iter()

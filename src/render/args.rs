@@ -164,8 +164,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_EDGE_SAMPLES)]
     pub edge_samples: u32,
 
-    /// Pilot caustic paths traced once per render to learn where each point, spot or sphere
-    /// light's aimed caustic photons do most good: every pass then draws more photons towards
+    /// Pilot caustic paths traced once per render (at most; 128 per cell of the lights' cones,
+    /// 64 cells a cone) to learn where each point, spot or sphere light's aimed caustic photons
+    /// do most good: every pass then draws more photons towards
     /// the dim parts of a caustic and fewer towards its bright peak, directly lit floor and
     /// misses, each carrying the flux its density gives it (unbiased; at most 2.5× an unguided
     /// photon's). 0: photons spread uniformly over the cones towards mirrors and glass.

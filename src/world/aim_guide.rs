@@ -19,7 +19,8 @@ use std::sync::Arc;
 
 /// Rings and sectors per cone: 256 cells a cone, 2,048 for a light aimed at eight targets.
 pub const SIDE: usize = 8;
-const CELLS: usize = SIDE * SIDE;
+/// Cells per cone.
+pub const CELLS: usize = SIDE * SIDE;
 
 /// The share of photons still drawn as unguided ones are (uniformly over the union): a guided
 /// photon carries at most 1/UNIFORM_SHARE times an unguided one's flux wherever it lands, so a
