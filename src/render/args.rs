@@ -170,7 +170,7 @@ pub struct RenderArgs {
     /// the dim parts of a caustic and fewer towards its bright peak, directly lit floor and
     /// misses, each carrying the flux its density gives it (unbiased; at most 2.5× an unguided
     /// photon's). 0: photons spread uniformly over the cones towards mirrors and glass.
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_GUIDE_PATHS)]
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_GUIDE_PATHS, allow_negative_numbers = true)]
     pub guide_paths: u64,
 
     /// Caustic radiance estimate.
