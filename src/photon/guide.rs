@@ -1,11 +1,11 @@
 //! Learning where a render's aimed caustic photons do most good (importance-driven emission, in
 //! the spirit of Peter and Pietrek's importance-driven photon maps, 1998): pilot paths traced
 //! once per render on their own stream, so that every pass, thread count and machine sees the
-//! same guide; their landings, each with the caustic irradiance the pilots give there, valued
-//! by the caller (`render::caustic_guide` weighs a landing by what the image shows there); and
-//! the values tallied per cone cell of the light each path left
-//! ([`crate::world::aim_guide`]). Owns the pilot paths and their caustic irradiance; must not
-//! decide what a landing is worth, nor shade.
+//! same guide; their landings valued by the caller (`render::caustic_guide` weighs a landing by
+//! what the image shows there, asking the pilots' own photons for the caustic light); and the
+//! values tallied per cone cell of the light each path left ([`crate::world::aim_guide`]), in
+//! fixed runs of paths summed in order. Owns the pilot paths and their caustic irradiance; must
+//! not decide what a landing is worth, nor shade.
 
 use super::tracer::{Emitter, NoRayLog, TracedPhoton, trace_path};
 use super::{KdTree, Neighbours, Photon};
@@ -22,8 +22,8 @@ const NEIGHBOURS: usize = 16;
 /// a lone photon on a wide floor is as dim as the pilots can tell at that.
 const REACH: f32 = 0.01;
 
-/// Pilot paths a cone cell needs: a cell's mean worth from about this many paths (half of
-/// them or fewer land) is good to a few percent.
+/// Pilot paths a cone cell gets at most. On the metal ring's 512 cells, 25,000 to 50,000
+/// pilots (49 to 98 a cell) gave the same error; more only cost time (BENCHMARKS.md).
 pub const PILOTS_PER_CELL: u64 = 128;
 
 /// Paths per parallel task.

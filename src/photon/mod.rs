@@ -1,5 +1,6 @@
 //! Photons: the compact record ([`record`]), the pure-Rust kd-tree ([`kdtree`]) and the photon
-//! map that pairs them ([`map`]). Photon *tracing* lives in [`tracer`]; nothing here calls
+//! map that pairs them ([`map`]). Photon *tracing* lives in [`tracer`], and what a render's
+//! pilot paths learn about where to send caustic photons in [`guide`]; nothing here calls
 //! Embree except through [`crate::world`].
 
 pub mod guide;

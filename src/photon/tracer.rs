@@ -12,7 +12,7 @@ use crate::optics::{reflect, scatter_dielectric};
 use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
 use crate::scene::Material;
 use crate::world::lights::{self, Emission, LightEmitter};
-use crate::world::{ClosestHit, Surface, World};
+use crate::world::{BoundingSphere, ClosestHit, Surface, World};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -116,22 +116,28 @@ impl<'w> Emitter<'w> {
     /// A pass's emitter: caustic photons aimed at the targets, through the world's caustic
     /// guide where it has one.
     fn new(world: &'w World, kind: MapKind, seed: u64) -> Option<Self> {
+        let targets = world.caustic_targets.as_slice();
         match kind {
-            MapKind::Caustic => Self::with(world, Stream::CausticPhotons, seed, true),
-            MapKind::Global { .. } => Self::with(world, Stream::GlobalPhotons, seed, false),
+            MapKind::Caustic => Self::with(world, targets, Stream::CausticPhotons, seed, true),
+            MapKind::Global { .. } => Self::with(world, &[], Stream::GlobalPhotons, seed, false),
         }
     }
 
     /// The caustic guide's pilot paths: aimed, never guided, on their own stream.
     pub(super) fn pilots(world: &'w World, seed: u64) -> Option<Self> {
-        Self::with(world, Stream::CausticPilots, seed, false)
+        let targets = world.caustic_targets.as_slice();
+        Self::with(world, targets, Stream::CausticPilots, seed, false)
     }
 
-    fn with(world: &'w World, stream: Stream, seed: u64, guided: bool) -> Option<Self> {
-        let aim = match stream {
-            Stream::GlobalPhotons => &[][..],
-            _ => world.caustic_targets.as_slice(),
-        };
+    /// Paths from `stream`, aimed at `aim` (none: unaimed), through the world's caustic guide
+    /// when `guided`.
+    fn with(
+        world: &'w World,
+        aim: &[BoundingSphere],
+        stream: Stream,
+        seed: u64,
+        guided: bool,
+    ) -> Option<Self> {
         let lights = (world.light_sources.iter().enumerate())
             .map(|(l, light)| {
                 let mut emitter = LightEmitter::new(light, aim);

@@ -1,6 +1,6 @@
 //! What a caustic photon landing is worth to this image, for the caustic guide learnt once per
-//! render (`photon::guide`, `world::aim_guide`). Owns that valuation; must not trace photons
-//! or shade pixels.
+//! render (`photon::guide`, `world::aim_guide`), and the phase that learns it before pass 0.
+//! Owns that valuation; must not trace photons or shade pixels.
 //!
 //! The image's error is relative (README, "Choosing the defaults": squared error over the
 //! reference's square plus ε², ε a tenth of the image's mean). A photon's share of a caustic
@@ -10,20 +10,48 @@
 //! a landing is worth one over the light seen there. R is estimated, in irradiance, as the
 //! direct light (one shadow ray per light) plus the pilots' own caustic irradiance there; ε as a
 //! tenth of the mean direct irradiance at the diffuse surfaces a coarse grid of camera rays
-//! sees. Landings outside the camera's view are worth nothing (the guide's floor still sends a
-//! few photons there, for the mirrors and glass that may show them).
+//! sees. Landings outside the camera's view are worth nothing (the guide's uniform share still
+//! sends photons there, for the mirrors and glass that may show them).
 
 use super::PinholeCamera;
+use super::pass::RenderSettings;
 use crate::photon::Neighbours;
 use crate::photon::guide::{Landing, PilotPhotons};
 use crate::sampling::{Rng, Stream};
 use crate::scene::Material;
+use crate::timing::PhaseTimes;
 use crate::world::{Surface, World};
 use glam::Vec3;
 use rayon::prelude::*;
 
 /// Camera rays per side of the grid that sets ε.
 const GRID: usize = 32;
+
+/// Learns the caustic guide (once per render, before pass 0: every pass draws through it) and
+/// hands it to the world's emitters.
+pub fn learn(world: &mut World, settings: &RenderSettings, seed: u64, times: &mut PhaseTimes) {
+    if settings.guide_paths == 0 || world.caustic_targets.is_empty() {
+        return;
+    }
+    let camera = PinholeCamera::new(&world.description.camera);
+    let guide = times.time("caustic guide", || {
+        crate::photon::guide::learn_caustic_guide(
+            world,
+            seed,
+            settings.guide_paths,
+            |landings, pilots| landing_worth(world, &camera, seed, landings, pilots),
+        )
+    });
+    times.add_counts(
+        "caustic guide",
+        &[
+            ("pilot paths", guide.paths),
+            ("landings", guide.landings),
+            ("guided lights", guide.guided_lights() as u64),
+        ],
+    );
+    world.caustic_guide = guide.cells;
+}
 
 /// One number per landing: 1 / √(R² + ε²) where the camera sees it, 0 elsewhere.
 pub fn landing_worth(
@@ -42,6 +70,8 @@ pub fn landing_worth(
                 return 0.0;
             }
             let caustic = pilots.caustic_irradiance(landing.position, found);
+            // The pilot paths take this stream's first indices, the ε grid those from 2⁶³, the
+            // landings' light samples those counting down from the top.
             let mut rng = Rng::for_index(seed, Stream::CausticPilots, u64::MAX - i as u64);
             let direct = direct_irradiance(world, landing.position, landing.normal, &mut rng);
             let r = f64::from(direct + caustic);

@@ -287,7 +287,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     let scene_hash = store::scene_fingerprint(&description);
     let mut world = times.time("build Embree scene", || World::new(description))?;
     let settings = render_settings(args, &world);
-    learn_caustic_guide(&mut world, &settings, args.seed, &mut times);
+    super::caustic_guide::learn(&mut world, &settings, args.seed, &mut times);
     let wanted = wanted_maps(&settings, &world);
     check_memory(settings.estimator.estimator, &world, &wanted)?;
     let schedule = Schedule::new(settings.alpha, args.seed);
@@ -575,39 +575,6 @@ pub fn relative_mse(image: &Image, reference: &Image) -> f64 {
             .collect()
     };
     crate::tradeoff::scene_metrics::relative_mse(&mean(image), &mean(reference))
-}
-
-/// Learns the caustic guide (once per render, before pass 0: every pass draws through it) and
-/// hands it to the world's emitters.
-fn learn_caustic_guide(
-    world: &mut World,
-    settings: &RenderSettings,
-    seed: u64,
-    times: &mut PhaseTimes,
-) {
-    if settings.guide_paths == 0 || world.caustic_targets.is_empty() {
-        return;
-    }
-    let camera = PinholeCamera::new(&world.description.camera);
-    let guide = times.time("caustic guide", || {
-        crate::photon::guide::learn_caustic_guide(
-            world,
-            seed,
-            settings.guide_paths,
-            |landings, pilots| {
-                super::caustic_guide::landing_worth(world, &camera, seed, landings, pilots)
-            },
-        )
-    });
-    times.add_counts(
-        "caustic guide",
-        &[
-            ("pilot paths", guide.paths),
-            ("landings", guide.landings),
-            ("guided lights", guide.guided_lights() as u64),
-        ],
-    );
-    world.caustic_guide = guide.cells;
 }
 
 /// What loading repaired or suspects: warnings on stderr, dropped triangles in the table.

@@ -270,7 +270,9 @@ impl LightSource {
 /// photon worked out once: the tracer draws millions of photons from each light. With targets,
 /// directions are drawn only towards them (when the emission point is outside them all, see
 /// [`super::aim::UnionOfCones`] and [`super::aim_grid::AimGrid`]) and the flux is weighted by
-/// the solid angle kept; lights at infinity start their photons on the targets' discs.
+/// the solid angle kept; lights at infinity start their photons on the targets' discs. A
+/// point, spot or sphere light may then be guided ([`LightEmitter::guide`]): its directions
+/// spread over its cones by the cells a render learnt ([`super::aim_guide`]).
 #[derive(Clone, Debug)]
 pub struct LightEmitter {
     source: Source,
