@@ -329,16 +329,30 @@ impl ConeFrame {
     /// its inverse, up to rounding (clamped into [0, 1)² for directions on the rim).
     #[inline(always)]
     pub fn coordinates(&self, direction: Vec3) -> (f32, f32) {
+        let (x, y) = self.tangent(direction);
+        let turns = y.atan2(x) * (0.5 / PI);
+        let u1 = if turns < 0.0 { turns + 1.0 } else { turns };
+        let below_one = 1.0 - f32::EPSILON / 2.0;
+        (self.first_coordinate(x, y), u1.clamp(0.0, below_one))
+    }
+
+    /// `direction` in the frame's tangent plane: (d·t, d·b), at the angle of the turn
+    /// [`ConeFrame::sample`] took, of length sin θ.
+    #[inline(always)]
+    pub fn tangent(&self, direction: Vec3) -> (f32, f32) {
+        (direction.dot(self.t), direction.dot(self.b))
+    }
+
+    /// The first number [`ConeFrame::sample`] took for a direction whose [`ConeFrame::tangent`]
+    /// is (`x`, `y`): its 1 − cos θ over the cone's, in [0, 1).
+    #[inline(always)]
+    pub fn first_coordinate(&self, x: f32, y: f32) -> f32 {
         let height = 1.0 - self.cos_max;
-        let (x, y) = (direction.dot(self.t), direction.dot(self.b));
         // 1 − cos θ from sin² θ: accurate in a cone a hair wide, where 1 − d·axis is rounding.
         let sin2 = x * x + y * y;
         let versine = sin2 / (1.0 + (1.0 - sin2).max(0.0).sqrt());
         let u0 = if height > 0.0 { versine / height } else { 0.0 };
-        let turns = y.atan2(x) * (0.5 / PI);
-        let u1 = if turns < 0.0 { turns + 1.0 } else { turns };
-        let below_one = 1.0 - f32::EPSILON / 2.0;
-        (u0.clamp(0.0, below_one), u1.clamp(0.0, below_one))
+        u0.clamp(0.0, 1.0 - f32::EPSILON / 2.0)
     }
 
     pub fn axis(&self) -> Vec3 {

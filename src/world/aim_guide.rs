@@ -65,13 +65,38 @@ impl AimedCones {
     }
 }
 
-/// Cell `(ring, sector)` of `direction` in the cone of `frame`, as an index below [`CELLS`].
+/// Cell `(ring, sector)` of `direction` in the cone of `frame`, as an index below [`CELLS`]:
+/// the cell whose numbers [`ConeFrame::sample`] turns into it. A guided photon asks this of
+/// every other cone that holds its direction, so the sector is found without an arctangent.
 #[inline(always)]
 fn cell_in(frame: &ConeFrame, direction: Vec3) -> usize {
-    let (u0, u1) = frame.coordinates(direction);
-    let ring = ((u0 * SIDE as f32) as usize).min(SIDE - 1);
-    let sector = ((u1 * SIDE as f32) as usize).min(SIDE - 1);
-    ring * SIDE + sector
+    let (x, y) = frame.tangent(direction);
+    let ring = ((frame.first_coordinate(x, y) * SIDE as f32) as usize).min(SIDE - 1);
+    ring * SIDE + octant(x, y)
+}
+
+/// Which eighth of a turn, counted from +x towards +y, the angle of (`x`, `y`) falls in: the
+/// sector of a cone cell, since there are eight ([`SIDE`]).
+#[inline(always)]
+fn octant(x: f32, y: f32) -> usize {
+    const _: () = assert!(SIDE == 8, "sectors are octants");
+    if y > 0.0 || (y == 0.0 && x >= 0.0) {
+        // [0, ½) turn.
+        match (x > 0.0, y < x.abs()) {
+            (true, true) => 0,
+            (true, false) => 1,
+            (false, false) => 2,
+            (false, true) => 3,
+        }
+    } else {
+        // [½, 1) turn.
+        match (x < 0.0, -y < x.abs()) {
+            (true, true) => 4,
+            (true, false) => 5,
+            (false, false) => 6,
+            (false, true) => 7,
+        }
+    }
 }
 
 /// Pilot photons' worth summed per cell of one light's cones: a direction counts in every cone
@@ -361,6 +386,40 @@ mod tests {
                 "{w} vs {uniform}"
             );
         }
+    }
+
+    /// The octant found by comparisons is the sector the arctangent gives, off the boundaries.
+    #[test]
+    fn octants_are_the_sectors_of_the_turn() {
+        let mut rng = Rng::for_index(8, Stream::Distribution, 0);
+        let frame = ConeFrame::new(Vec3::new(0.3, -0.5, 0.8).normalize(), 0.2);
+        let mut seen = [0; SIDE];
+        for _ in 0..100_000 {
+            let d = frame.sample(rng.next_2d());
+            let (_, turns) = frame.coordinates(d);
+            let eighths = turns * 8.0;
+            if (eighths - eighths.round()).abs() < 1e-4 {
+                continue;
+            }
+            let (x, y) = frame.tangent(d);
+            assert_eq!(
+                octant(x, y),
+                eighths as usize,
+                "({x}, {y}) at {turns} turns"
+            );
+            seen[octant(x, y)] += 1;
+        }
+        assert!(seen.iter().all(|&n| n > 10_000), "{seen:?}");
+        // The axes, exactly: a quarter turn starts each of octants 0, 2, 4 and 6.
+        assert_eq!(
+            [
+                octant(1.0, 0.0),
+                octant(0.0, 1.0),
+                octant(-1.0, 0.0),
+                octant(0.0, -1.0)
+            ],
+            [0, 2, 4, 6]
+        );
     }
 
     /// Pilots that found nothing leave the light unguided.
