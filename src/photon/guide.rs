@@ -7,10 +7,11 @@
 //! fixed runs of paths summed in order. Owns the pilot paths and their caustic irradiance; must
 //! not decide what a landing is worth, nor shade.
 
-use super::tracer::{Emitter, NoRayLog, TracedPhoton, trace_path};
+use super::tracer::{Emitter, LivePath, MapKind, NoRayLog, TracedPhoton, trace_path};
 use super::{KdTree, Neighbours, Photon};
 use crate::world::World;
-use crate::world::aim_guide::{CELLS, ConeCells, GuideTally};
+use crate::world::aim::PreparedUnion;
+use crate::world::aim_guide::{AimedCones, CELLS, ConeCells, GuideTally};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -74,16 +75,14 @@ pub fn learn_caustic_guide(
     let Some(emitter) = Emitter::pilots(world, seed) else {
         return none;
     };
-    let aimed: Vec<bool> = (0..world.light_sources.len())
-        .map(|l| emitter.light(l).aimed_cones().is_some())
+    // Each light's cones, where it aims from one point.
+    let unions: Vec<Option<&PreparedUnion>> = (0..world.light_sources.len())
+        .map(|l| emitter.light(l).aimed_cones().map(AimedCones::union))
         .collect();
-    if !aimed.contains(&true) {
+    if unions.iter().all(Option::is_none) {
         return none;
     }
-    let cells: usize = (0..aimed.len())
-        .filter_map(|l| emitter.light(l).aimed_cones())
-        .map(|cones| cones.union().len() * CELLS)
-        .sum();
+    let cells: usize = unions.iter().flatten().map(|u| u.len() * CELLS).sum();
     let paths = paths.min(PILOTS_PER_CELL * cells as u64);
     // Per path: its light, first direction and the photon it stored, in path order.
     let traced: Vec<(usize, Vec3, Option<TracedPhoton>)> = (0..paths.div_ceil(CHUNK))
@@ -97,14 +96,8 @@ pub fn learn_caustic_guide(
                 };
                 let (light, direction) = (start.light, start.direction);
                 stored.clear();
-                let live = super::tracer::LivePath::new(0, start);
-                trace_path(
-                    world,
-                    super::tracer::MapKind::Caustic,
-                    live,
-                    &mut stored,
-                    &mut NoRayLog,
-                );
+                let live = LivePath::new(0, start);
+                trace_path(world, MapKind::Caustic, live, &mut stored, &mut NoRayLog);
                 out.push((light, direction, stored.first().copied()));
             }
             out
@@ -139,25 +132,15 @@ pub fn learn_caustic_guide(
         .collect();
     // Tallied in fixed runs of paths and summed in their order: the same sums whatever the
     // thread count.
-    let fresh = || -> Vec<Option<GuideTally>> {
-        (0..aimed.len())
-            .map(|l| {
-                emitter
-                    .light(l)
-                    .aimed_cones()
-                    .map(|c| GuideTally::new(c.union()))
-            })
-            .collect()
-    };
+    let fresh =
+        || -> Vec<Option<GuideTally>> { unions.iter().map(|u| u.map(GuideTally::new)).collect() };
     let runs: Vec<Vec<Option<GuideTally>>> = (traced.par_chunks(CHUNK as usize))
         .zip(paths_worth.par_chunks(CHUNK as usize))
         .map(|(paths, worth)| {
             let mut tallies = fresh();
             for ((light, direction, _), &value) in paths.iter().zip(worth) {
-                if let (Some(tally), Some(cones)) =
-                    (&mut tallies[*light], emitter.light(*light).aimed_cones())
-                {
-                    tally.add(cones.union(), *direction, value);
+                if let (Some(tally), Some(union)) = (&mut tallies[*light], unions[*light]) {
+                    tally.add(union, *direction, value);
                 }
             }
             tallies
@@ -171,12 +154,8 @@ pub fn learn_caustic_guide(
             }
         }
     }
-    let cells = (tallies.iter().enumerate())
-        .map(|(l, tally)| {
-            let tally = tally.as_ref()?;
-            let cones = emitter.light(l).aimed_cones()?;
-            ConeCells::learn(cones.union(), tally).map(Arc::new)
-        })
+    let cells = (tallies.iter().zip(&unions))
+        .map(|(tally, union)| ConeCells::learn((*union)?, tally.as_ref()?).map(Arc::new))
         .collect();
     LearntGuide {
         cells,

@@ -6,18 +6,20 @@
 //! must not trace rays or decide what a photon is worth.
 //!
 //! Unbiased whatever the table says: every cell keeps a probability above zero (a share of the
-//! photons, [`UNIFORM_SHARE`], is drawn as unguided ones are), a direction's density is summed over every cone that holds it (as the
-//! unguided union's is), and the photon carries one over that density. The table only moves
-//! photons: from cells whose paths miss or land where the image is bright (the caustic's own
-//! peak, directly lit floor) to cells whose photons land where it is dim, so that the
-//! estimate's relative error evens out over the picture.
+//! photons, [`UNIFORM_SHARE`], is drawn as unguided ones are), a direction's density is summed
+//! over every cone that holds it (as the unguided union's is), and the photon carries one over
+//! that density. The table only moves photons: from cells whose paths miss or land where the
+//! image is bright (the caustic's own peak, directly lit floor) to cells whose photons land
+//! where it is dim, so that the estimate's relative error evens out over the picture.
 
 use super::aim::PreparedUnion;
 use crate::sampling::{ConeFrame, Rng};
 use glam::Vec3;
 use std::sync::Arc;
 
-/// Rings and sectors per cone: 256 cells a cone, 2,048 for a light aimed at eight targets.
+/// Rings and sectors per cone: 64 cells a cone, 512 for a light aimed at eight targets. Finer
+/// cells learnt from as many pilots are noisier, and were no better on the metal ring (16 a side
+/// with 100k pilots, 32 with 400k; BENCHMARKS.md, session 12).
 pub const SIDE: usize = 8;
 /// Cells per cone.
 pub const CELLS: usize = SIDE * SIDE;
@@ -194,10 +196,9 @@ impl ConeCells {
             })
             .collect();
         let total: f64 = mixed.iter().sum();
-        let worth = mixed;
-        let probability: Vec<f32> = worth.iter().map(|w| (w / total) as f32).collect();
+        let probability: Vec<f32> = mixed.iter().map(|w| (w / total) as f32).collect();
         let mut running = 0.0f64;
-        let cumulative = (worth.iter())
+        let cumulative = (mixed.iter())
             .map(|w| {
                 running += w / total;
                 running as f32
