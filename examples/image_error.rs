@@ -19,7 +19,7 @@ fn main() -> ExitCode {
         read_image(Path::new(reference)),
     ) {
         (Ok(a), Ok(b)) if (a.width, a.height) == (b.width, b.height) => {
-            println!("{:.6e}", dpm::render::pipeline::relative_mse(&a, &b));
+            println!("{:.6e}", dpm::image_metrics::image_relative_mse(&a, &b));
             ExitCode::SUCCESS
         }
         (Ok(a), Ok(b)) => {

@@ -11,6 +11,7 @@ pub mod density;
 pub mod embree;
 pub mod estimate;
 pub mod image_io;
+pub mod image_metrics;
 pub mod interrupt;
 pub mod optics;
 pub mod photon;

@@ -1,9 +1,13 @@
-//! Phase timing and progress: every long stage shows an indicatif bar (hidden when stderr is not
-//! a terminal) and records its wall time and counts, printed at the end as a table and written
-//! as JSON with `--stats`. Owns reporting only; it never changes what is computed.
+//! Phase timing and progress: every long stage shows an indicatif bar (on a terminal; elsewhere,
+//! a log line when it starts) and records its wall time and counts, printed at the end as a
+//! table and written as JSON with `--stats`. A program embedding dpm (or a test) can
+//! [`watch_phases`] to learn when each stage starts. Owns reporting only; it never changes what
+//! is computed.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
+use std::sync::Mutex;
+use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
 #[derive(Clone, Debug, Serialize)]
@@ -99,11 +103,14 @@ impl PhaseTimes {
     }
 }
 
-/// A progress bar on stderr for `len` units of work, hidden unless stderr is a terminal.
+/// A progress bar on stderr for `len` units of work. Off a terminal (a log file, a batch
+/// job) the bar stays hidden and one line says the stage started instead.
 pub fn progress(len: u64, what: &str) -> ProgressBar {
+    announce(what);
     let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
     if !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         bar.set_draw_target(ProgressDrawTarget::hidden());
+        eprintln!("started: {what} ({len})");
     }
     let style = ProgressStyle::with_template(
         "{msg:>18} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
@@ -113,6 +120,24 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     bar.set_style(style);
     bar.set_message(what.to_string());
     bar
+}
+
+static WATCHERS: Mutex<Vec<Sender<String>>> = Mutex::new(Vec::new());
+
+/// A channel that receives the name of every stage with a progress bar ("caustic photons",
+/// "render", ...) as it starts, in this process, until the receiver is dropped.
+pub fn watch_phases() -> Receiver<String> {
+    let (send, receive) = channel();
+    WATCHERS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(send);
+    receive
+}
+
+fn announce(what: &str) {
+    let mut watchers = WATCHERS.lock().unwrap_or_else(|e| e.into_inner());
+    watchers.retain(|w| w.send(what.to_string()).is_ok());
 }
 
 #[cfg(test)]
@@ -138,5 +163,22 @@ mod tests {
         assert_eq!(t.phases.len(), 2);
         assert!((t.seconds("render") - 1.0).abs() < 1e-9);
         assert_eq!(t.phases[1].counts, vec![("pixels".to_string(), 10)]);
+    }
+
+    #[test]
+    fn watchers_hear_each_stage_start_until_they_leave() {
+        let first = watch_phases();
+        let second = watch_phases();
+        progress(3, "stage one").finish_and_clear();
+        drop(second);
+        progress(3, "stage two").finish_and_clear();
+        // Other tests may start stages of their own at the same time.
+        let heard: Vec<String> = first.try_iter().collect();
+        let one = heard.iter().position(|w| w == "stage one");
+        let two = heard.iter().position(|w| w == "stage two");
+        assert!(
+            one.is_some_and(|one| two.is_some_and(|two| one < two)),
+            "{heard:?}"
+        );
     }
 }

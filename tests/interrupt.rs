@@ -2,13 +2,15 @@
 //! photon tracing or during the eye pass returns `Interrupted` (exit code 130, "interrupted;
 //! OUT was not written"), leaves an earlier output file byte for byte as it was, and leaves no
 //! temporary file behind. The in-process cases share the process-wide flag, so they run one
-//! after another inside one test.
+//! after another inside one test. Every interruption waits for the stage it is meant to land
+//! in to start (`dpm::timing::watch_phases` in process, the binary's `started:` lines), never
+//! for a guessed duration, so a loaded machine only makes the tests slower.
 
 mod reliability_support;
 
 use clap::Parser;
-use dpm::interrupt;
 use dpm::render::pipeline::{self, RenderArgs, RenderError};
+use dpm::{interrupt, timing};
 use reliability_support::*;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -45,27 +47,47 @@ fn strays(dir: &Path, keep: &[&Path]) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Runs `args`, requesting an interruption after `delay` (None: before starting).
-fn interrupted_run(args: &RenderArgs, delay: Option<Duration>) -> (RenderError, Duration) {
+/// Runs `args`, requesting an interruption as soon as the stage `at` starts (None: before
+/// starting); returns the error and how long the render took to stop once asked.
+fn interrupted_run(args: &RenderArgs, at: Option<&str>) -> (RenderError, Duration) {
     interrupt::reset();
-    let start = Instant::now();
+    let phases = timing::watch_phases();
+    let asked = std::sync::Mutex::new(None);
+    let done = std::sync::atomic::AtomicBool::new(false);
     let result = std::thread::scope(|s| {
-        match delay {
-            None => interrupt::request(),
-            Some(d) => {
+        match at {
+            None => {
+                *asked.lock().unwrap() = Some(Instant::now());
+                interrupt::request();
+            }
+            Some(stage) => {
+                let (asked, done) = (&asked, &done);
                 s.spawn(move || {
-                    std::thread::sleep(d);
-                    interrupt::request();
+                    // The timeout only lets this thread see that the render ended without
+                    // the stage (the test then fails below); it decides nothing.
+                    while !done.load(std::sync::atomic::Ordering::SeqCst) {
+                        let Ok(started) = phases.recv_timeout(Duration::from_millis(50)) else {
+                            continue;
+                        };
+                        if started == stage {
+                            *asked.lock().unwrap() = Some(Instant::now());
+                            interrupt::request();
+                            return;
+                        }
+                    }
                 });
             }
         }
-        pipeline::run(args)
+        let result = pipeline::run(args);
+        done.store(true, std::sync::atomic::Ordering::SeqCst);
+        result
     });
-    let elapsed = start.elapsed();
     interrupt::reset();
-    match result {
-        Ok(_) => panic!("the render finished before the interruption ({elapsed:?})"),
-        Err(e) => (e, elapsed),
+    let asked = asked.into_inner().unwrap();
+    match (result, asked) {
+        (Err(e), Some(asked)) => (e, asked.elapsed()),
+        (Err(e), None) => panic!("the render stopped before {at:?} started: {e}"),
+        (Ok(_), _) => panic!("the render finished before the interruption at {at:?}"),
     }
 }
 
@@ -93,25 +115,25 @@ fn an_interrupted_render_writes_nothing_and_keeps_the_old_output() {
         "--spp",
         "16",
     ];
-    let cases: Vec<(&str, Vec<&str>, Option<Duration>, bool)> = vec![
+    let cases: Vec<(&str, Vec<&str>, Option<&str>, bool)> = vec![
         ("before starting", vec!["--save-photons", p], None, false),
         (
             "while tracing",
             [&heavy_trace[..], &["--save-photons", p]].concat(),
-            Some(Duration::from_millis(300)),
+            Some("caustic photons"),
             false,
         ),
         (
             "while rendering",
             [&heavy_render[..], &["--save-photons", p]].concat(),
-            Some(Duration::from_millis(1500)),
+            Some("render"),
             true,
         ),
     ];
-    for (what, extra, delay, saved) in cases {
+    for (what, extra, at, saved) in cases {
         let _ = std::fs::remove_file(&photons);
-        let (e, elapsed) = interrupted_run(&args(&scene, &output, &extra), delay);
-        eprintln!("{what}: {elapsed:?}");
+        let (e, elapsed) = interrupted_run(&args(&scene, &output, &extra), at);
+        eprintln!("{what}: stopped {elapsed:?} after the request");
         assert!(
             matches!(&e, RenderError::Interrupted { output: o, .. } if *o == output),
             "{what}: {e:?}"
@@ -166,36 +188,27 @@ fn ctrl_c_stops_the_binary_with_exit_130_and_keeps_the_old_output() {
     let output = dir.path().join("out.png");
     let earlier = b"an earlier render".to_vec();
     std::fs::write(&output, &earlier).unwrap();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dpm"))
-        .args([
-            "render".as_ref(),
-            scene.as_os_str(),
-            "-o".as_ref(),
-            output.as_os_str(),
-        ])
-        .args([
-            "--caustic-photons",
-            "0",
-            "--global-photons",
-            "0",
-            "--spp",
-            "64",
-        ])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
-    assert!(
-        child.try_wait().unwrap().is_none(),
-        "the render ended too soon to interrupt"
+    let mut run = LoggedRun::spawn(
+        std::process::Command::new(env!("CARGO_BIN_EXE_dpm"))
+            .args([
+                "render".as_ref(),
+                scene.as_os_str(),
+                "-o".as_ref(),
+                output.as_os_str(),
+            ])
+            .args([
+                "--caustic-photons",
+                "0",
+                "--global-photons",
+                "0",
+                "--spp",
+                "64",
+            ]),
     );
+    run.wait_for_line("started: render ", 1);
     let sent = Instant::now();
-    let kill = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let out = child.wait_with_output().unwrap();
+    run.interrupt();
+    let out = run.finish();
     let stopped = sent.elapsed();
     assert_fails(
         &out,
@@ -224,45 +237,30 @@ fn ctrl_c_during_a_progressive_render_keeps_the_complete_passes() {
     let scene = write_scene(dir.path(), "scene.toml", &caustic_scene(1.0, 200, 150));
     let output = dir.path().join("out.pfm");
     let film = dir.path().join("out.film");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dpm"))
-        .args([
-            "render".as_ref(),
-            scene.as_os_str(),
-            "-o".as_ref(),
-            output.as_os_str(),
-        ])
-        .args(["--film".as_ref(), film.as_os_str()])
-        .args([
-            "--caustic-photons",
-            "50000",
-            "--passes",
-            "100000",
-            "--spp",
-            "4",
-        ])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    // The film appears once the first pass is complete; the next ones then follow.
-    let start = Instant::now();
-    while !film.exists() {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "no pass completed"
-        );
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "the render ended too soon"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    std::thread::sleep(Duration::from_millis(300));
-    let kill = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let out = child.wait_with_output().unwrap();
+    let mut run = LoggedRun::spawn(
+        std::process::Command::new(env!("CARGO_BIN_EXE_dpm"))
+            .args([
+                "render".as_ref(),
+                scene.as_os_str(),
+                "-o".as_ref(),
+                output.as_os_str(),
+            ])
+            .args(["--film".as_ref(), film.as_os_str()])
+            .args([
+                "--caustic-photons",
+                "50000",
+                "--passes",
+                "100000",
+                "--spp",
+                "4",
+            ]),
+    );
+    // The film is written when a pass completes, before the next pass starts: the second
+    // pass's eye pass starting means pass 0 is in the film and pass 1 is in flight.
+    run.wait_for_line("started: render ", 2);
+    assert!(film.exists(), "no film after the first pass");
+    run.interrupt();
+    let out = run.finish();
     assert_fails(&out, 130, &["interrupted: the output holds the "], "Ctrl-C");
     let film = dpm::render::film_file::read(&film).expect("a whole film");
     let passes = film.passes().count();

@@ -6,7 +6,8 @@
 
 mod support;
 
-use dpm::render::pipeline::{self, relative_mse};
+use dpm::image_metrics::image_relative_mse as relative_mse;
+use dpm::render::pipeline;
 use dpm::scene::{self, Camera, Handedness, Light, LoadOptions, Material, Shape};
 use glam::DVec3;
 use glam::Vec3;

@@ -451,11 +451,6 @@ fn mean_values(sums: &[glam::DVec3], passes: u64) -> Vec<f64> {
         .collect()
 }
 
-/// The mean of the RGB channels: the scalar the metrics and the CSV use.
-pub fn channel_mean(p: Vec3) -> f64 {
-    (p.x as f64 + p.y as f64 + p.z as f64) / 3.0
-}
-
 /// Stops that map the true peak, or without a truth the estimate's 99.5th percentile, to white.
 fn auto_exposure(values: &[f64], truth: Option<&[f64]>) -> f32 {
     let white = match truth {

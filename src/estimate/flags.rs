@@ -6,118 +6,157 @@
 use super::diffusion::{DiffusionKernel, DiffusivityUnits};
 use super::settings::{EstimatorKind, EstimatorSettings, PAPER_K};
 
+/// The help headings these flags stand under.
+pub mod headings {
+    pub const ESTIMATE: &str = "Caustic estimate";
+    pub const KERNEL: &str = "Diffusion kernel";
+}
+
 /// Radiance-estimate flags, shared by `dpm render`, `dpm density` and their progressive runs.
 #[derive(Clone, Debug, PartialEq, clap::Args)]
 pub struct EstimatorFlags {
-    /// Radiance estimate. `diffusion` is the paper's method; `cone` with k = 400 is the
-    /// paper's baseline; `simple`, `gaussian` (k-NN) and `epanechnikov` (fixed radius) are the
-    /// other classic estimates. Every k-NN estimate leaves the k-th photon out of its sum, so
-    /// all of them are unbiased on a uniform density.
-    #[arg(long, value_enum, default_value_t = EstimatorKind::Diffusion)]
+    /// Radiance estimate: `diffusion` is the paper's method, `cone` (k = 400) its baseline.
+    ///
+    /// `simple`, `gaussian` (k-NN) and `epanechnikov` (fixed radius) are the other classic
+    /// estimates. Every k-NN estimate leaves the k-th photon out of its sum, so all of them
+    /// are unbiased on a uniform density.
+    #[arg(long, value_enum, default_value_t = EstimatorKind::Diffusion,
+          help_heading = headings::ESTIMATE)]
     pub estimator: EstimatorKind,
 
-    /// Photons per estimate for the k-NN estimates (the k-th sets the radius and is left out,
-    /// so k ≥ 2); default 400, the paper's cone-filter setting, the baseline the diffusion
-    /// estimate is compared with. For the fixed-radius estimates it sets the default --radius
-    /// (a disc of about k photons where photons typically are): 400 in `dpm density`, 100 in
-    /// `dpm render`, whose caustics' error at a render's budget was mostly the blur of their
-    /// bright folds (README, "Choosing the defaults"). The diffusion estimate's flat regions
-    /// are quieter with more (see --diffusivity).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Photons per k-NN estimate (default 400); sets the default --radius of the others.
+    ///
+    /// For the k-NN estimates the k-th photon sets the radius and is left out, so k ≥ 2;
+    /// 400 is the paper's cone-filter setting, the baseline the diffusion estimate is
+    /// compared with. For the fixed-radius estimates it sets the default --radius (a disc of
+    /// about k photons where photons typically are): 400 in `dpm density`, 100 in `dpm
+    /// render`, whose caustics' error at a render's budget was mostly the blur of their
+    /// bright folds (docs/guide.md, "Choosing settings"). The diffusion estimate's flat
+    /// regions are quieter with more (see --diffusivity).
+    #[arg(long, allow_negative_numbers = true, help_heading = headings::ESTIMATE)]
     pub k: Option<usize>,
 
-    /// Support radius of the fixed-radius estimates (epanechnikov, diffusion), in scene units.
+    /// Support radius of the fixed-radius estimates (epanechnikov, diffusion), scene units.
+    ///
     /// For the k-NN estimates it caps the search instead (default: no cap). Default for the
     /// fixed-radius estimates: the k-equivalent radius, the median over up to 256 photons
     /// spread through the map of the distance to their k-th nearest other photon, so a disc
     /// holds about k photons where photons typically are.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_name = "R", allow_negative_numbers = true,
+          help_heading = headings::ESTIMATE)]
     pub radius: Option<f32>,
 
-    /// Slope constant of the cone filter (≥ 1; the weight is 1 − d/(slope·r)). 1.1 is
-    /// Jensen's suggestion; leaving the k-th photon out keeps every slope unbiased.
-    #[arg(long, default_value_t = 1.1, allow_negative_numbers = true)]
+    /// Slope constant of the cone filter (≥ 1; the weight is 1 − d/(slope·r)).
+    ///
+    /// 1.1 is Jensen's suggestion; leaving the k-th photon out keeps every slope unbiased.
+    #[arg(long, value_name = "SLOPE", default_value_t = 1.1, allow_negative_numbers = true,
+          help_heading = headings::ESTIMATE, hide_short_help = true)]
     pub cone_slope: f64,
 
-    /// Radius of the diffusion estimate's gradient pass (Eq. 6). Default: radius/2 — small
-    /// enough that thin lines still show in the gradient (with radius itself they vanished in
-    /// the design notes' experiment), large enough to keep the gradient's noise down.
-    #[arg(long, allow_negative_numbers = true)]
+    /// Radius of the gradient pass (Eq. 6); default radius/2.
+    ///
+    /// Small enough that thin lines still show in the gradient (with radius itself they
+    /// vanished in the design notes' experiment), large enough to keep the gradient's noise
+    /// down.
+    #[arg(long, value_name = "R", allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub gradient_radius: Option<f32>,
 
-    /// Radius over which the diffusion estimate averages the structure tensor. Default:
-    /// radius, so one search serves both the tensor and the estimate.
-    #[arg(long, allow_negative_numbers = true)]
+    /// Radius over which the structure tensor is averaged; default radius.
+    ///
+    /// With the default, one search serves both the tensor and the estimate.
+    #[arg(long, value_name = "R", allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub smoothing_radius: Option<f32>,
 
-    /// Diffusivity coefficient K (Eq. 9): the edge contrast above which the kernel narrows
-    /// across the edge (≥ 0; 0 narrows it wherever there is any gradient, inf keeps it round).
-    /// In dimensionless units 0.2 means the irradiance changes by about √0.2 ≈ 45% of itself
+    /// Diffusivity K (Eq. 9): the edge contrast above which the kernel narrows across it.
+    ///
+    /// K ≥ 0; 0 narrows it wherever there is any gradient, inf keeps it round. In
+    /// dimensionless units 0.2 means the irradiance changes by about √0.2 ≈ 45% of itself
     /// over one radius; 0.2 kept edges and thin lines best in the design notes' experiment.
     /// Noise alone reaches a contrast of about 64/N with N photons per disc (gradient radius
     /// r/2), so flat regions stay round, with noise within ~1.1× of the isotropic estimate,
     /// for N ≳ 1000; at N = 400 expect ~1.4×: raise --k or --radius, or K, if flat regions
     /// look noisy.
-    #[arg(long, default_value_t = 0.2, allow_negative_numbers = true)]
+    #[arg(long, value_name = "K", default_value_t = 0.2, allow_negative_numbers = true,
+          help_heading = headings::KERNEL)]
     pub diffusivity: f64,
 
-    /// Units of --diffusivity. `dimensionless` compares K with μ1·r²/L̂² (L̂: the isotropic
-    /// estimate at the point), which does not change with light power or scene scale, so one
-    /// K serves every scene; `absolute` compares it with μ1 in (W m⁻³)², as in the paper,
-    /// where K must be retuned whenever the power or the scale changes.
-    #[arg(long, value_enum, default_value_t = DiffusivityUnits::Dimensionless)]
+    /// Units of --diffusivity: relative edge contrast, or the paper's absolute μ1.
+    ///
+    /// `dimensionless` compares K with μ1·r²/L̂² (L̂: the isotropic estimate at the point),
+    /// which does not change with light power or scene scale, so one K serves every scene;
+    /// `absolute` compares it with μ1 in (W m⁻³)², as in the paper, where K must be retuned
+    /// whenever the power or the scale changes.
+    #[arg(long, value_enum, default_value_t = DiffusivityUnits::Dimensionless,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub k_units: DiffusivityUnits,
 
-    /// Steepness α > 0 of the diffusivity function λ2 = 1/(1 + (contrast/K)^(1+α)). 1 gives a
-    /// gradual transition between flat regions and edges.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    /// Steepness α > 0 of the diffusivity λ2 = 1/(1 + (contrast/K)^(1+α)).
+    ///
+    /// 1 gives a gradual transition between flat regions and edges.
+    #[arg(long, value_name = "A", default_value_t = 1.0, allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub alpha: f64,
 
-    /// Eigenvalue λ3 of the diffusion tensor along the surface normal, in (0, 1]: the kernel
-    /// reaches r·√λ3 off the tangent plane. 0.1 is the paper's value (a disc rather than a
-    /// sphere, to limit bias in corners).
-    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
+    /// Eigenvalue λ3 of the diffusion tensor along the surface normal, in (0, 1].
+    ///
+    /// The kernel reaches r·√λ3 off the tangent plane. 0.1 is the paper's value (a disc
+    /// rather than a sphere, to limit bias in corners).
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub lambda3: f64,
 
     /// Lower bound of λ2, in (0, 1]: the kernel is at least r·√floor wide across an edge.
+    ///
     /// 0.01 (a tenth of the radius) sharpened edges most in the design notes' experiment;
     /// 0.05 lost a third of the gain there; without a bound the kernel degenerates to a
     /// segment.
-    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub lambda2_floor: f64,
 
-    /// Photon noise removed from the structure tensor before the diffusivity: μ1 is reduced by
-    /// this many times the gradient variance that photon noise alone would give (computed from
-    /// the photons' Σ Φ² around the point). 0 is the paper's raw μ1, which reads noise as
-    /// structure and squeezes the kernel wherever photons are sparse (wormy flat regions);
-    /// 2 removes the noise's mean and its typical fluctuation after smoothing, and leaves edges,
-    /// whose μ1 is far above it, untouched.
-    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
+    /// Photon noise removed from the structure tensor, in gradient-noise variances.
+    ///
+    /// μ1 is reduced by this many times the gradient variance that photon noise alone would
+    /// give (computed from the photons' Σ Φ² around the point). 0 is the paper's raw μ1,
+    /// which reads noise as structure and squeezes the kernel wherever photons are sparse
+    /// (wormy flat regions); 2 removes the noise's mean and its typical fluctuation after
+    /// smoothing, and leaves edges, whose μ1 is far above it, untouched.
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub noise_floor: f64,
 
-    /// Fewest photons the diffusion estimate's kernel should hold (0: no bound). The ellipse
-    /// holds about N·√λ2 of the N photons in its disc, so λ2 is kept at least (m/N)²: a kernel
-    /// squeezed onto a few photons is shaped by their own noise, a bias that averaging passes
-    /// does not remove. Where discs hold few photons (a progressive render's late passes, dim
-    /// regions) the kernel turns round, and the estimate stays consistent. 8 lowered every
-    /// error of progressive diffusion at the default radius on the constructed distribution
-    /// (BENCHMARKS.md); 16 and 32 blurred edges in late passes.
-    #[arg(long, default_value_t = 8.0, allow_negative_numbers = true)]
+    /// Fewest photons the diffusion kernel should hold (0: no bound).
+    ///
+    /// The ellipse holds about N·√λ2 of the N photons in its disc, so λ2 is kept at least
+    /// (m/N)²: a kernel squeezed onto a few photons is shaped by their own noise, a bias that
+    /// averaging passes does not remove. Where discs hold few photons (a progressive
+    /// render's late passes, dim regions) the kernel turns round, and the estimate stays
+    /// consistent. 8 lowered every error of progressive diffusion at the default radius on
+    /// the constructed distribution (BENCHMARKS.md); 16 and 32 blurred edges in late passes.
+    #[arg(long, value_name = "M", default_value_t = 8.0, allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub min_kernel_photons: f64,
 
-    /// Gradient sites the diffusion estimate's smoothing disc keeps at least (0: every photon
-    /// gets a gradient). Where a disc would hold more than twice this many photons (a
-    /// concentrated caustic, or a radius far above the photon spacing) the gradient pass
-    /// takes gradients at one photon in m only, each standing for m, so its cost follows
-    /// what the structure tensor needs rather than the photon pile-up. 512 moved no error of
-    /// the constructed distribution's table by more than 1% (256: the flat-region noise of
-    /// the absolute-K rows by 3.6%; BENCHMARKS.md).
-    #[arg(long, default_value_t = 512.0, allow_negative_numbers = true)]
+    /// Gradient sites the smoothing disc keeps at least (0: every photon gets a gradient).
+    ///
+    /// Where a disc would hold more than twice this many photons (a concentrated caustic,
+    /// or a radius far above the photon spacing) the gradient pass takes gradients at one
+    /// photon in m only, each standing for m, so its cost follows what the structure tensor
+    /// needs rather than the photon pile-up. 512 moved no error of the constructed
+    /// distribution's table by more than 1% (256: the flat-region noise of the absolute-K
+    /// rows by 3.6%; BENCHMARKS.md).
+    #[arg(long, value_name = "M", default_value_t = 512.0, allow_negative_numbers = true,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub gradient_sites: f64,
 
-    /// Kernel of the diffusion estimate, evaluated at the Mahalanobis distance. Epanechnikov
-    /// is the paper's choice and the cheapest; gaussian is Jensen's shape, exactly normalised.
-    #[arg(long, value_enum, default_value_t = DiffusionKernel::Epanechnikov)]
+    /// Kernel shape at the Mahalanobis distance: epanechnikov (the paper's) or gaussian.
+    ///
+    /// Epanechnikov is the paper's choice and the cheapest; gaussian is Jensen's shape,
+    /// exactly normalised.
+    #[arg(long, value_enum, default_value_t = DiffusionKernel::Epanechnikov,
+          help_heading = headings::KERNEL, hide_short_help = true)]
     pub kernel: DiffusionKernel,
 }
 

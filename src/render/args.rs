@@ -7,197 +7,249 @@ use crate::estimate::EstimatorFlags;
 use crate::estimate::precomputed::DEFAULT_STRIDE;
 use std::path::PathBuf;
 
+/// `dpm render --help`'s headings, in the order a user meets the choices. `-h` shows the
+/// flags most renders set; `--help` shows every flag with its default.
+pub mod headings {
+    pub const OUTPUT: &str = "Output and progress";
+    pub const PASSES: &str = "Progressive passes and films";
+    pub const PHOTONS: &str = "Photons";
+    pub use crate::estimate::flags::headings::{ESTIMATE, KERNEL};
+    pub const EYE: &str = "Eye pass and sampling";
+    pub const DIAGNOSTICS: &str = "Photon files and diagnostics";
+}
+
 #[derive(Clone, Debug, clap::Args)]
 pub struct RenderArgs {
     /// Scene file: dpm's TOML, or a pbrt-v3/v4 scene by the `.pbrt` extension (see
     /// docs/scene-format.md).
     pub scene: PathBuf,
 
-    /// Refuse a pbrt material dpm can only approximate (uber, plastic, rough metals, ...)
-    /// instead of rendering its diffuse part with a warning.
-    #[arg(long)]
-    pub strict: bool,
-
-    /// Output image; the format follows the extension: .png (tone-mapped sRGB), .exr (linear
-    /// float RGB, with direct, caustic and indirect layers and, with the diffusion estimate,
-    /// the kernel field), .pfm (linear float RGB). Rewritten atomically as passes complete.
-    /// Default: the scene's name with .png.
-    #[arg(short, long)]
+    /// Output image: .png, .exr or .pfm (default: the scene's name with .png).
+    ///
+    /// The format follows the extension: .png (tone-mapped sRGB), .exr (linear float RGB, with
+    /// direct, caustic and indirect layers and, with the diffusion estimate, the kernel
+    /// field), .pfm (linear float RGB). Rewritten atomically as passes complete.
+    #[arg(short, long, value_name = "IMAGE", help_heading = headings::OUTPUT)]
     pub output: Option<PathBuf>,
 
-    /// Worker threads (0: one per core). The image does not depend on it.
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
+    /// Render at WIDTHxHEIGHT pixels instead of the scene's resolution.
+    ///
+    /// E.g. 1280x720. The vertical field of view stays the scene's `fov_y`, so a wider image
+    /// sees more at the sides. A film remembers its resolution: --resume and `dpm merge`
+    /// refuse another.
+    #[arg(long, value_name = "WxH", value_parser = parse_resolution, allow_hyphen_values = true,
+          help_heading = headings::OUTPUT)]
+    pub resolution: Option<(u32, u32)>,
+
+    /// Exposure in stops for PNG output (linear formats are written unscaled).
+    #[arg(long, value_name = "STOPS", default_value_t = 0.0, allow_negative_numbers = true,
+          help_heading = headings::OUTPUT)]
+    pub exposure: f32,
+
+    /// Worker threads (0: one per core); the image does not depend on it.
+    #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
+          help_heading = headings::OUTPUT)]
     pub threads: usize,
 
     /// Seed of every random number (photon paths and pixel samples of every pass).
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
+    #[arg(long, value_name = "S", default_value_t = 1, allow_negative_numbers = true,
+          help_heading = headings::OUTPUT)]
     pub seed: u64,
 
-    /// Progressive passes to render. Each traces fresh photons, shrinks every radius by
-    /// r²(i+1) = r²(i)·(i+α)/(i+1) and renders fresh pixel samples; the image is their mean,
-    /// and converges as passes accumulate. Default: 8 (1 with --save-photons or
-    /// --load-photons; with --time, as many as the budget holds).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Refuse a pbrt material dpm can only approximate instead of mapping it with a warning.
+    ///
+    /// uber, plastic, rough metals, ...: without --strict dpm renders their diffuse part and
+    /// says so once per material.
+    #[arg(long, help_heading = headings::OUTPUT)]
+    pub strict: bool,
+
+    /// A reference image (.pfm or .exr) to report the error against after every pass.
+    ///
+    /// Same resolution as the render; the relative MSE shows in the progress bar and --stats.
+    #[arg(long, value_name = "IMAGE", help_heading = headings::OUTPUT)]
+    pub reference: Option<PathBuf>,
+
+    /// Progressive passes to render (default 8).
+    ///
+    /// Each traces fresh photons, shrinks every radius by r²(i+1) = r²(i)·(i+α)/(i+1) and
+    /// renders fresh pixel samples; the image is their mean, and converges as passes
+    /// accumulate. Default: 8 (1 with --save-photons or --load-photons; with --time, as many
+    /// as the budget holds).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, help_heading = headings::PASSES)]
     pub passes: Option<u64>,
 
-    /// Wall-clock budget in seconds: passes run until the next one (predicted from the mean
-    /// pass time so far) would overrun it. The first pass always runs.
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    /// Wall-clock budget: passes run while the next one fits in it.
+    ///
+    /// The next pass is predicted from the mean pass time so far; the first pass always runs.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true,
+          help_heading = headings::PASSES)]
     pub time: Option<f64>,
 
-    /// Index of the first pass (passes are the same whichever run renders them, so ranges
-    /// rendered apart can be merged with `dpm merge`).
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
+    /// Save the film (every pass's per-pixel sums) to FILE after every pass.
+    ///
+    /// Written atomically, with the scene's hash, seed and settings: `--resume FILE`
+    /// continues it, `dpm merge` combines it with films of other pass ranges.
+    #[arg(long, value_name = "FILE", help_heading = headings::PASSES)]
+    pub film: Option<PathBuf>,
+
+    /// Continue the film in FILE (same scene, seed and settings).
+    ///
+    /// Passes start where it ends. It is rewritten there unless --film names another file.
+    #[arg(long, value_name = "FILE", help_heading = headings::PASSES)]
+    pub resume: Option<PathBuf>,
+
+    /// Index of the first pass, to render a range apart for `dpm merge`.
+    ///
+    /// Passes are the same whichever run renders them, so ranges rendered on other runs or
+    /// machines merge into the image one run would have made.
+    #[arg(long, value_name = "I", default_value_t = 0, allow_negative_numbers = true,
+          help_heading = headings::PASSES, hide_short_help = true)]
     pub first_pass: u64,
 
     /// α of the progressive radius reduction, in (0, 1) (Knaus and Zwicker: 2/3).
-    #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
+    #[arg(long, value_name = "A", default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true,
+          help_heading = headings::PASSES, hide_short_help = true)]
     pub ppm_alpha: f64,
 
-    /// Save the film (per-pixel sums of every pass, with the scene's hash, seed and settings)
-    /// to FILE after every pass, atomically: `--resume FILE` continues it, `dpm merge` combines it.
-    #[arg(long, value_name = "FILE")]
-    pub film: Option<PathBuf>,
-
-    /// Continue the film in FILE (same scene, seed and settings): passes start where it ends.
-    /// It is rewritten there unless --film names another file.
-    #[arg(long, value_name = "FILE")]
-    pub resume: Option<PathBuf>,
-
-    /// Rewrite -o (and --film) at most every this many seconds (0: after every pass); the
-    /// last pass is always written.
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        default_value_t = 0.0,
-        allow_negative_numbers = true
-    )]
+    /// Rewrite -o (and --film) at most every this many seconds (0: after every pass).
+    ///
+    /// The last pass is always written.
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0, allow_negative_numbers = true,
+          help_heading = headings::PASSES, hide_short_help = true)]
     pub write_every: f64,
 
-    /// A reference image (.pfm or .exr, same resolution) to report the error against after
-    /// every pass (relative MSE, in the progress bar and --stats).
-    #[arg(long, value_name = "IMAGE")]
-    pub reference: Option<PathBuf>,
-
-    /// Render at WIDTHxHEIGHT pixels instead of the scene's `resolution` (e.g. 1280x720). The
-    /// vertical field of view stays the scene's `fov_y`, so a wider image sees more at the
-    /// sides. A film remembers its resolution: --resume and `dpm merge` refuse another.
-    #[arg(long, value_name = "WxH", value_parser = parse_resolution, allow_hyphen_values = true)]
-    pub resolution: Option<(u32, u32)>,
-
-    /// Camera samples per pixel in each pass, stratified within the pixel across samples and
-    /// passes (one Owen-scrambled Sobol sequence per pixel).
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
-    pub spp: u32,
-
-    /// Exposure in stops for PNG output (linear formats are written unscaled).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub exposure: f32,
-
-    /// Mirror and glass bounces followed from the eye.
-    #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
-    pub max_depth: u32,
-
-    /// Photons STORED in each pass's caustic map (light → specular+ → diffuse); paths are
-    /// emitted until this many are stored. Only built when the scene has a mirror or glass
-    /// object; 0 turns caustics off.
-    #[arg(long, default_value_t = DEFAULT_CAUSTIC_PHOTONS, allow_negative_numbers = true)]
+    /// Photons stored in each pass's caustic map (0: no caustics).
+    ///
+    /// Light → mirror/glass+ → diffuse paths are emitted until this many are stored. Only
+    /// built when the scene has a mirror or glass object.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_CAUSTIC_PHOTONS,
+          allow_negative_numbers = true, help_heading = headings::PHOTONS)]
     pub caustic_photons: usize,
 
-    /// Photons STORED in each pass's global map (indirect diffuse light). Default: 300000 when
-    /// the scene has two or more diffuse objects (so diffuse light can bounce between them),
-    /// else 0 (no global map: a lone plane cannot light itself).
-    #[arg(long, allow_negative_numbers = true)]
+    /// Photons stored in each pass's global map (indirect diffuse light).
+    ///
+    /// Default: 300000 when the scene has two or more diffuse objects (so diffuse light can
+    /// bounce between them), else 0 (no global map: a lone plane cannot light itself).
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          help_heading = headings::PHOTONS)]
     pub global_photons: Option<usize>,
 
-    /// Final-gather rays per diffuse eye hit for indirect light; 0 (the default) shows the
-    /// global map's estimate directly: over progressive passes its blotches average out and
-    /// its corner darkening shrinks with the radius, and it reached every error sooner than
-    /// 1 or 4 gather rays did (README, "Choosing the defaults").
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
-    pub final_gather: u32,
-
-    /// Photons per global-map estimate (constant kernel, k-th photon left out).
-    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
-    pub global_k: usize,
-
-    /// With final gathering, the global estimate is computed once per pass at one photon in N
-    /// of the global map and a gather ray reads the nearest such point whose normal
-    /// agrees (Christensen's precomputed irradiance) instead of running its own estimate;
-    /// 0 turns it off (a k-NN estimate per gather ray).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true)]
-    pub irradiance_stride: usize,
-
-    /// Shadow rays per area light (sphere, quad or mesh) and per environment at each diffuse
-    /// eye hit, stratified and averaged; a point, spot or distant light takes one.
-    #[arg(
-        long,
-        value_name = "N",
-        default_value_t = DEFAULT_LIGHT_SAMPLES,
-        allow_negative_numbers = true
-    )]
-    pub light_samples: u32,
-
-    /// Glass hits along an eye path that follow both the reflected and the refracted ray
-    /// (weighted by the Fresnel reflectance); past them a path follows one, chosen with that
-    /// probability. Splitting every hit costs up to 2^depth rays a pixel through thick glass
-    /// for detail a few more passes average in anyway; 0 is pure sampling, 1000 splits every
-    /// hit (the Whitted tracer).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_GLASS_SPLIT_DEPTH)]
-    pub glass_split_depth: u32,
-
-    /// Samples per pass of the light seen along mirror and glass chains (the lights, their
-    /// images in glass and mirrors, the environment), in each pixel where one of a 3×3 grid
-    /// of pilot rays meets a light, mirror or glass first; those pixels' camera samples leave
-    /// that light out. A light's image through glass is often smaller than a pixel, and a
-    /// camera sample's rare hit of it is the largest error of a few passes: these samples
-    /// are rays only, so many cost little. 0: camera samples count it themselves
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_EMISSION_SAMPLES)]
-    pub emission_samples: u32,
-
-    /// Camera samples per pass in the pixels that hold an edge: where the pixel's pilot rays
-    /// (its centre and corners, traced once per render) see other objects, other chains
-    /// through mirrors and glass, normals turned more than 30°, or a light point that one
-    /// sees and another does not (a shadow's edge). A pixel's value there is the mean of a
-    /// step across it, which one sample a pass resolves slowly; these samples cost little
-    /// beside the image. 0: edge pixels take --spp like the rest (so does any N below it).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_EDGE_SAMPLES)]
-    pub edge_samples: u32,
-
-    /// Pilot caustic paths traced once per render (at most; 128 per cell of the lights' cones,
-    /// 64 cells a cone) to learn where each point, spot or sphere light's aimed caustic photons
-    /// do most good: every pass then draws more photons towards
-    /// the dim parts of a caustic and fewer towards its bright peak, directly lit floor and
-    /// misses, each carrying the flux its density gives it (unbiased; at most 2.5× an unguided
-    /// photon's). 0: photons spread uniformly over the cones towards mirrors and glass.
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_GUIDE_PATHS, allow_negative_numbers = true)]
+    /// Pilot caustic paths traced once per render to aim the caustic photons (0: off).
+    ///
+    /// At most 128 per cell of the lights' cones, 64 cells a cone: they learn where each
+    /// point, spot or sphere light's aimed caustic photons do most good, and every pass then
+    /// draws more photons towards the dim parts of a caustic and fewer towards its bright
+    /// peak, directly lit floor and misses, each carrying the flux its density gives it
+    /// (unbiased; at most 2.5× an unguided photon's). 0: photons spread uniformly over the
+    /// cones towards mirrors and glass.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_GUIDE_PATHS,
+          allow_negative_numbers = true, help_heading = headings::PHOTONS, hide_short_help = true)]
     pub guide_paths: u64,
 
-    /// Caustic radiance estimate.
     #[command(flatten)]
     pub estimate: EstimatorFlags,
 
-    /// Also write the diffusion kernel's shape at each pixel's first diffuse hit (hue = edge
-    /// direction, brightness = 1 − λ2, averaged over passes), like the paper's Figure 2b.
-    /// Needs --estimator diffusion.
-    #[arg(long)]
+    /// Camera samples per pixel in each pass.
+    ///
+    /// Stratified within the pixel across samples and passes (one Owen-scrambled Sobol
+    /// sequence per pixel).
+    #[arg(long, value_name = "N", default_value_t = 1, allow_negative_numbers = true,
+          help_heading = headings::EYE)]
+    pub spp: u32,
+
+    /// Mirror and glass bounces followed from the eye.
+    #[arg(long, value_name = "N", default_value_t = 10, allow_negative_numbers = true,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub max_depth: u32,
+
+    /// Shadow rays per area light and per environment at each diffuse eye hit.
+    ///
+    /// Stratified and averaged, for sphere, quad and mesh lights and the environment; a
+    /// point, spot or distant light takes one.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_SAMPLES,
+          allow_negative_numbers = true, help_heading = headings::EYE, hide_short_help = true)]
+    pub light_samples: u32,
+
+    /// Glass hits along an eye path that follow both the reflected and the refracted ray.
+    ///
+    /// Both are weighted by the Fresnel reflectance; past them a path follows one, chosen
+    /// with that probability. Splitting every hit costs up to 2^depth rays a pixel through
+    /// thick glass for detail a few more passes average in anyway; 0 is pure sampling, 1000
+    /// splits every hit (the Whitted tracer).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_GLASS_SPLIT_DEPTH,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub glass_split_depth: u32,
+
+    /// Samples per pass of the lights seen through mirrors and glass, where pilots see them.
+    ///
+    /// The lights, their images in glass and mirrors, and the environment are sampled apart
+    /// in each pixel where a pilot ray meets a light, mirror or glass first; those pixels'
+    /// camera samples leave that light out. A light's image through glass is often smaller
+    /// than a pixel, and a camera sample's rare hit of it is the largest error of a few
+    /// passes: these samples are rays only, so many cost little. 0: camera samples count it
+    /// themselves.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_EMISSION_SAMPLES,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub emission_samples: u32,
+
+    /// Camera samples per pass in the pixels that hold an edge.
+    ///
+    /// An edge pixel is one whose pilot rays (its centre and corners, traced once per
+    /// render) see other objects, other chains through mirrors and glass, normals turned
+    /// more than 30°, or a light point that one sees and another does not (a shadow's edge).
+    /// A pixel's value there is the mean of a step across it, which one sample a pass
+    /// resolves slowly. 0: edge pixels take --spp like the rest (so does any N below it).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_EDGE_SAMPLES,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub edge_samples: u32,
+
+    /// Final-gather rays per diffuse eye hit for indirect light (0: the global map directly).
+    ///
+    /// With 0, over progressive passes the global map's blotches average out and its corner
+    /// darkening shrinks with the radius; it reached every error sooner than 1 or 4 gather
+    /// rays did (docs/guide.md, "Choosing settings").
+    #[arg(long, value_name = "N", default_value_t = 0, allow_negative_numbers = true,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub final_gather: u32,
+
+    /// Photons per global-map estimate (constant kernel, k-th photon left out).
+    #[arg(long, value_name = "K", default_value_t = 100, allow_negative_numbers = true,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub global_k: usize,
+
+    /// With final gathering, precompute irradiance at one global photon in N (0: off).
+    ///
+    /// Christensen's precomputed irradiance: once per pass at one photon in N of the global
+    /// map, and a gather ray reads the nearest such point whose normal agrees instead of
+    /// running its own estimate; 0 runs a k-NN estimate per gather ray.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub irradiance_stride: usize,
+
+    /// Also write the diffusion kernel's shape at each pixel (the paper's Figure 2b).
+    ///
+    /// At each pixel's first diffuse hit: hue = edge direction, brightness = 1 − λ2,
+    /// averaged over passes. Needs --estimator diffusion.
+    #[arg(long, value_name = "IMAGE", help_heading = headings::DIAGNOSTICS)]
     pub kernel_field: Option<PathBuf>,
 
     /// Write the per-phase times, counts and per-pass errors as JSON.
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = headings::DIAGNOSTICS)]
     pub stats: Option<PathBuf>,
 
-    /// Save pass 0's photon maps to FILE (versioned binary with a checksum, written
-    /// atomically) right after tracing, so a later one-pass render can skip tracing with
-    /// --load-photons.
-    #[arg(long, value_name = "FILE")]
+    /// Save pass 0's photon maps to FILE right after tracing.
+    ///
+    /// A versioned binary with a checksum, written atomically, so a later one-pass render
+    /// can skip tracing with --load-photons.
+    #[arg(long, value_name = "FILE", help_heading = headings::DIAGNOSTICS, hide_short_help = true)]
     pub save_photons: Option<PathBuf>,
 
-    /// Load the photon maps from FILE (made by --save-photons) instead of tracing them, for a
-    /// one-pass render. The file must come from the same scene (lights, materials,
+    /// Load the photon maps from FILE (made by --save-photons) instead of tracing them.
+    ///
+    /// For a one-pass render. The file must come from the same scene (lights, materials,
     /// geometry), --seed and photon counts; the image is then identical to one from freshly
     /// traced maps.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help_heading = headings::DIAGNOSTICS, hide_short_help = true)]
     pub load_photons: Option<PathBuf>,
 }
 
@@ -297,3 +349,86 @@ pub const MAX_GUIDE_PATHS: u64 = 100_000_000;
 pub const MAX_EDGE_SAMPLES: u32 = 4096;
 /// Most emission samples a pixel may take per pass (more is a typo, not a setting).
 pub const MAX_EMISSION_SAMPLES: u32 = 65_536;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::{CommandFactory, Parser};
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: RenderArgs,
+    }
+
+    const HEADINGS: [&str; 7] = [
+        headings::OUTPUT,
+        headings::PASSES,
+        headings::PHOTONS,
+        headings::ESTIMATE,
+        headings::KERNEL,
+        headings::EYE,
+        headings::DIAGNOSTICS,
+    ];
+
+    /// Every flag stands under one of the headings, which `--help` shows in reading order;
+    /// `-h` keeps the common flags and drops the rest.
+    #[test]
+    fn help_groups_every_flag_under_a_heading() {
+        let mut cmd = Cli::command();
+        cmd.build();
+        cmd.clone().debug_assert();
+        for arg in cmd.get_arguments() {
+            if arg.is_positional() || ["help"].contains(&arg.get_id().as_str()) {
+                continue;
+            }
+            let heading = arg.get_help_heading();
+            assert!(
+                heading.is_some_and(|h| HEADINGS.contains(&h)),
+                "--{} stands under {heading:?}",
+                arg.get_id()
+            );
+        }
+        let long = cmd.clone().render_long_help().to_string();
+        let at = |text: &str, h: &str| text.find(&format!("\n{h}:\n"));
+        let places: Vec<usize> = HEADINGS
+            .iter()
+            .map(|h| at(&long, h).unwrap_or_else(|| panic!("{h} missing from --help")))
+            .collect();
+        assert!(places.is_sorted(), "headings out of order: {places:?}");
+
+        let short = cmd.render_help().to_string();
+        for flag in [
+            "--output",
+            "--passes",
+            "--time",
+            "--film",
+            "--resume",
+            "--estimator",
+        ] {
+            assert!(short.contains(flag), "{flag} missing from -h");
+        }
+        for flag in ["--glass-split-depth", "--noise-floor", "--load-photons"] {
+            assert!(!short.contains(flag), "{flag} in -h");
+            assert!(long.contains(flag), "{flag} missing from --help");
+        }
+        assert!(short.lines().count() * 3 < long.lines().count() * 2);
+    }
+
+    /// `--help` names the default of every flag that has a fixed one.
+    #[test]
+    fn long_help_shows_every_fixed_default() {
+        let cmd = Cli::command();
+        let long = cmd.clone().render_long_help().to_string();
+        for arg in cmd.get_arguments() {
+            if let Some(default) = arg.get_default_values().first() {
+                let shown = format!("[default: {}]", default.to_string_lossy());
+                let flag = format!("--{}", arg.get_long().unwrap());
+                let from = long.find(&format!("{flag} ")).expect("flag listed");
+                let entry = &long[from..];
+                let end = entry[1..].find("\n      --").map_or(entry.len(), |e| e + 1);
+                assert!(entry[..end].contains(&shown), "{flag}'s {shown} missing");
+            }
+        }
+    }
+}

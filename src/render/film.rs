@@ -345,7 +345,7 @@ impl Film {
         let k = self.kernel_channels()?;
         Some(Image::from_fn(k.width, k.height, |x, y| {
             let v = k.get(x, y);
-            crate::density::kernel_field::colour(v.z.atan2(v.y) * 0.5, v.x)
+            crate::estimate::diffusion::field_colour::colour(v.z.atan2(v.y) * 0.5, v.x)
         }))
     }
 }

@@ -1,12 +1,15 @@
-//! The render stage, shaped as a pass loop. A render is a sequence of independent passes
-//! ([`schedule`] says what pass `i` draws and at which radii); each pass ([`pass`]) traces its
-//! own photon maps, prepares its estimates, shades fresh camera samples ([`camera`]) through
-//! the [`integrator`], with the light seen along mirror and glass chains sampled apart in
-//! the pixels that need it ([`emission`]) and drops its maps; the [`film`] accumulates the passes' images and is
-//! what gets written ([`output`], [`film_file`]) and merged ([`merge`]). [`pipeline`] is the
-//! command line around that loop, with its up-front memory check ([`memory_budget`]) and pass 0's
-//! photon map files ([`photon_files`]). Owns
-//! pixels, sample placement and accumulation; must not parse scenes or store photons.
+//! The render stage, shaped as a pass loop. [`pipeline`] is the command line around it: it
+//! checks the flags, lets [`setup`] load the world and decide once what every pass shares
+//! (settings, the caustic guide [`caustic_guide`], the memory check [`memory_budget`], where
+//! the passes start, the pilot rays' pixel plan [`pilots`]), runs the [`pass_loop`] and writes
+//! the result. A render is a sequence of independent passes ([`schedule`] says what pass `i`
+//! draws and at which radii); each pass ([`pass`]) traces its own photon maps (or reads pass
+//! 0's from a file, [`photon_files`]), prepares its estimates, shades fresh camera samples
+//! ([`camera`]) through the [`integrator`], with the light seen along mirror and glass chains
+//! sampled apart in the pixels that need it ([`emission`]), and drops its maps; the [`film`]
+//! accumulates the passes' images and is what gets written ([`output`], [`film_file`]) and
+//! merged ([`merge`]). Owns pixels, sample placement and accumulation; must not parse scenes
+//! or store photons.
 
 pub mod args;
 pub mod camera;
@@ -19,10 +22,12 @@ pub mod memory_budget;
 pub mod merge;
 pub mod output;
 pub mod pass;
+pub mod pass_loop;
 pub mod photon_files;
 pub mod pilots;
 pub mod pipeline;
 pub mod schedule;
+pub mod setup;
 
 pub use camera::{PassSamples, PinholeCamera};
 pub use film::{Film, PassImage};

@@ -1,13 +1,10 @@
-//! `dpm render` from the command line to the files: the flags ([`super::args`]) checked
-//! together, then the pass loop. Scene file → Embree world → for each pass ([`super::pass`]:
-//! its maps, its estimates, its pixels) → the [`Film`] → `-o`, `--film` and the kernel field,
-//! rewritten atomically as passes complete, with a progress bar over the passes and a
-//! per-phase timing table at the end. Owns checking the flags, the pass budget (`--passes`, `--time`), resuming and writing; must not implement any stage.
-//!
-//! The loop: passes run from the first (`--first-pass`, or the end of a `--resume`d film) for
-//! `--passes` passes, or while the time budget lasts: a pass whose predicted time (the mean of
-//! this run's pass times) would overrun `--time` is not started, though the first pass always
-//! runs. Ctrl-C ends the current pass unfinished and writes the film of the complete ones.
+//! `dpm render` from the command line to the files, in the order a render runs: the flags
+//! ([`super::args`]) checked together ([`validate`]); the scene loaded and the passes' shared
+//! settings wired ([`super::setup`]); the passes ([`super::pass_loop`], each one a
+//! [`super::pass`]) into the [`Film`]; then `-o`, `--film`, the kernel field and `--stats`
+//! written from the complete passes, with a per-phase timing table at the end. Owns the
+//! errors and exit codes of a render, checking the flags and the final writes; must not
+//! implement any stage.
 
 pub use super::args::{
     DEFAULT_CAUSTIC_PHOTONS, DEFAULT_EMISSION_SAMPLES, DEFAULT_GLASS_SPLIT_DEPTH,
@@ -15,25 +12,23 @@ pub use super::args::{
     MAX_EMISSION_SAMPLES, MAX_IRRADIANCE_STRIDE, MAX_LIGHT_SAMPLES, RenderArgs, parse_resolution,
 };
 use super::camera::PinholeCamera;
-use super::film::{Film, FilmHeader};
+use super::film::Film;
 use super::film_file::{self, FilmFileError};
-use super::memory_budget::check_memory;
 use super::output::{write_film_image, write_kernel_field};
-use super::pass::{BaseRadii, PassContext, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
-use super::photon_files::{load_maps, save_maps, validate_photon_files};
-use super::pilots::PixelPlan;
-use super::schedule::{MAX_PASSES, Schedule};
+use super::pass_loop::{LoopOutcome, PassLoop};
+use super::photon_files::validate_photon_files;
+use super::schedule::MAX_PASSES;
+use super::setup::{Wiring, load_world, survey_pixels};
 use crate::embree::{self, EmbreeError};
 use crate::estimate::settings::{EstimateError, EstimatorKind};
 use crate::image_io::{self, Image, ImageError, ImageFormat};
-use crate::photon::store::{self, StoreError};
-use crate::photon::tracer::{MapKind, TraceCounts};
-use crate::scene::{self, Material, SceneError};
-use crate::timing::{PhaseTimes, progress};
-use crate::world::World;
+use crate::photon::store::StoreError;
+use crate::photon::tracer::TraceCounts;
+use crate::scene::SceneError;
+use crate::timing::PhaseTimes;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -218,7 +213,7 @@ pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
 
 /// The passes asked for: --passes, else one for a photon-map file's single pass, else the
 /// default (with --time and no --passes the budget decides instead).
-fn pass_count(args: &RenderArgs) -> u64 {
+pub(super) fn pass_count(args: &RenderArgs) -> u64 {
     args.passes.unwrap_or(
         if args.save_photons.is_some() || args.load_photons.is_some() {
             1
@@ -228,263 +223,73 @@ fn pass_count(args: &RenderArgs) -> u64 {
     )
 }
 
-/// The settings every pass of this render uses.
-fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
-    let diffuse_objects = world
-        .description
-        .shapes
-        .iter()
-        .filter(|s| {
-            let m = match s {
-                scene::Shape::Sphere { material, .. } => *material,
-                scene::Shape::Triangles(t) => t.material,
-            };
-            matches!(world.material(m), Material::Diffuse { .. })
-        })
-        .count();
-    RenderSettings {
-        caustic_photons: args.caustic_photons,
-        global_photons: args.global_photons.unwrap_or(if diffuse_objects >= 2 {
-            DEFAULT_GLOBAL_PHOTONS
-        } else {
-            0
-        }),
-        spp: args.spp,
-        max_depth: args.max_depth,
-        final_gather: args.final_gather,
-        global_k: args.global_k,
-        irradiance_stride: args.irradiance_stride,
-        light_samples: args.light_samples,
-        glass_split_depth: args.glass_split_depth,
-        emission_samples: args.emission_samples,
-        edge_samples: args.edge_samples,
-        guide_paths: if args.caustic_photons > 0 {
-            args.guide_paths
-        } else {
-            0
-        },
-        alpha: args.ppm_alpha,
-        estimator: args.estimate.settings_with_radius_k(DEFAULT_RADIUS_K),
-    }
-}
-
 fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, RenderError> {
     embree::enable_flush_to_zero();
     let run_start = Instant::now();
     let mut times = PhaseTimes::new();
-    let (mut description, report) = times.time("load scene", || {
-        let options = scene::LoadOptions {
-            strict: args.strict,
-        };
-        scene::load_with_options(&args.scene, &options)
-    })?;
-    if let Some((width, height)) = args.resolution {
-        // The field of view stays the scene's vertical one.
-        description.camera.width = width;
-        description.camera.height = height;
-    }
-    report_load(args, &report, &mut times);
-    let scene_hash = store::scene_fingerprint(&description);
-    let mut world = times.time("build Embree scene", || World::new(description))?;
-    let settings = render_settings(args, &world);
-    super::caustic_guide::learn(&mut world, &settings, args.seed, &mut times);
-    let wanted = wanted_maps(&settings, &world);
-    check_memory(settings.estimator.estimator, &world, &wanted)?;
-    let schedule = Schedule::new(settings.alpha, args.seed);
+    let (mut world, scene_hash) = load_world(args, &mut times)?;
+    let wiring = Wiring::new(args, &mut world, scene_hash, &output, &mut times)?;
     let camera = &world.description.camera;
-    // The kernel field needs the diffusion estimate and a caustic map to steer it.
-    let kernel_field = settings.estimator.estimator == EstimatorKind::Diffusion
-        && wanted.iter().any(|w| w.kind == MapKind::Caustic)
-        && (args.kernel_field.is_some()
-            || ImageFormat::from_path(&output).ok() == Some(ImageFormat::Exr));
-    let header = |radii: BaseRadii| FilmHeader {
-        scene_file: args.scene.display().to_string(),
-        scene_hash,
-        seed: args.seed,
-        width: camera.width as usize,
-        height: camera.height as usize,
-        settings: settings.clone(),
-        radii,
-        kernel_field,
-    };
     let reference = match &args.reference {
         Some(path) => Some(read_reference(path, camera.width, camera.height)?),
         None => None,
     };
-
-    // The film to continue, or none yet (its header needs pass 0's radii).
-    let mut film: Option<Film> = None;
-    let mut first = args.first_pass;
-    if let Some(path) = &args.resume {
-        let resumed = times.time("read film", || film_file::read(path))?;
-        let probe = header(resumed.header.radii);
-        if let Some(field) = resumed.header.first_difference(&probe) {
-            return Err(RenderError::Invalid(format!(
-                "--resume {}: the film's {field} differs from this render's; it cannot be continued",
-                path.display()
-            )));
-        }
-        first = resumed.passes().end();
-        film = Some(resumed);
-    }
-    let film_path = args.film.clone().or_else(|| args.resume.clone());
-    let mut saved_photons = None;
-    let mut radii = film.as_ref().map(|f| f.header.radii);
-    if radii.is_none() && first > 0 {
-        // A run that does not start at pass 0 needs pass 0's radii: given ones need no maps,
-        // derived ones need pass 0's, traced once.
-        let given = settings.estimator.radius.is_some()
-            || !wanted.iter().any(|w| w.kind == MapKind::Caustic);
-        let global = wanted
-            .iter()
-            .any(|w| matches!(w.kind, MapKind::Global { .. }));
-        let maps = if given && !global {
-            PassMaps::default()
-        } else {
-            trace_pass_maps(&world, &settings, &schedule, 0, &mut times)
-        };
-        radii = Some(BaseRadii::resolve(&settings, &maps)?);
-    }
-
-    let limit = match (args.passes, args.time) {
-        (None, Some(_)) => MAX_PASSES,
-        _ => pass_count(args),
-    };
-    let last = (first + limit).min(MAX_PASSES);
-    // Passes done of N; with a budget and no pass count, seconds elapsed of the budget.
-    let budget_bar = args.time.filter(|_| args.passes.is_none());
-    let bar = match budget_bar {
-        Some(t) => progress(t.ceil() as u64, "seconds of budget"),
-        None => progress(last - first, "passes"),
-    };
-    let pinhole = PinholeCamera::new(camera);
-    let found = times.time("pilot rays", || {
-        PixelPlan::survey(
-            &pinhole,
-            &world,
-            settings.max_depth,
-            settings.emission_samples,
-            settings.edge_samples,
-        )
-    });
-    let Some(plan) = found else {
+    let start = wiring.start(args, &world, &mut times)?;
+    let camera = PinholeCamera::new(camera);
+    let Some(plan) = survey_pixels(&camera, &world, &wiring.settings, &mut times) else {
         return Err(RenderError::Interrupted {
             output,
             saved_photons: None,
         });
     };
-    times.add_counts(
-        "pilot rays",
-        &[
-            ("emission pixels", plan.emission_pixels() as u64),
-            ("edge pixels", plan.edge_pixels() as u64),
-        ],
-    );
-    let mut records: Vec<PassRecord> = Vec::new();
-    let mut last_report = None;
-    let mut last_write: Option<Instant> = None;
-    let mut budget_note = None;
-    let mut interrupted = false;
-    for pass in first..last {
-        if let (Some(budget), false) = (args.time, records.is_empty()) {
-            let mean = records.iter().map(|r| r.seconds).sum::<f64>() / records.len() as f64;
-            if run_start.elapsed().as_secs_f64() + mean > budget {
-                break;
-            }
-        }
-        let pass_start = Instant::now();
-        let maps = if pass == 0 && args.load_photons.is_some() {
-            load_maps(args, scene_hash, &wanted, &mut times)?
-        } else {
-            trace_pass_maps(&world, &settings, &schedule, pass, &mut times)
-        };
-        if crate::interrupt::requested() {
-            interrupted = true;
-            break;
-        }
-        if pass == 0
-            && let Some(path) = &args.save_photons
-        {
-            save_maps(path, scene_hash, args.seed, &wanted, &maps, &mut times)?;
-            saved_photons = Some(path.clone());
-        }
-        // Pass 0's maps resolve the base radii; later passes only scale them.
-        let radii = match radii {
-            Some(r) => r,
-            None => *radii.insert(BaseRadii::resolve(&settings, &maps)?),
-        };
-        let film = film.get_or_insert_with(|| Film::new(header(radii)));
-        let context = PassContext {
-            world: &world,
-            camera: pinhole,
-            plan: &plan,
-            settings: &settings,
-            radii,
-            schedule,
-            kernel_field,
-        };
-        let Some(report) = context.run(pass, maps, &mut times)? else {
-            interrupted = true;
-            break;
-        };
-        film.add_pass(pass, &report.image)
-            .expect("a pass's image fits its film and is new to it");
-        let seconds = pass_start.elapsed().as_secs_f64();
-        let relative_mse = reference.as_ref().map(|r| relative_mse(&film.image(), r));
-        records.push(PassRecord {
-            pass,
-            seconds,
-            elapsed: run_start.elapsed().as_secs_f64(),
-            relative_mse,
-        });
-        last_report = Some(report);
-        if pass == first
-            && args
-                .time
-                .is_some_and(|t| run_start.elapsed().as_secs_f64() > t)
-        {
-            budget_note = Some(format!(
-                "the --time budget ({:.1} s) is shorter than one pass ({seconds:.1} s); one pass ran",
-                args.time.unwrap_or_default()
-            ));
-        }
-        match budget_bar {
-            Some(_) => bar.set_position(run_start.elapsed().as_secs()),
-            None => bar.inc(1),
-        }
-        bar.set_message(pass_message(film, &records, &last_report));
-        let due =
-            last_write.is_none_or(|t| t.elapsed() >= Duration::from_secs_f64(args.write_every));
-        if due && pass + 1 < last {
-            write_outputs(args, &output, film_path.as_deref(), film, &mut times)?;
-            last_write = Some(Instant::now());
-        }
-    }
-    bar.finish_and_clear();
-    let Some(film) = film.filter(|f| !f.passes().is_empty()) else {
+    let passes = PassLoop {
+        args,
+        world: &world,
+        wiring: &wiring,
+        camera,
+        plan: &plan,
+        reference,
+        output: &output,
+        film_path: args.film.clone().or_else(|| args.resume.clone()),
+        run_start,
+    };
+    let ran = passes.run(start, &mut times)?;
+    let film_path = passes.film_path;
+    finish(args, output, film_path.as_deref(), ran, times)
+}
+
+/// Writes what the complete passes hold (the image, the film, the kernel field, the stats)
+/// and the outcome; with no complete pass, says nothing was written.
+fn finish(
+    args: &RenderArgs,
+    output: PathBuf,
+    film_path: Option<&Path>,
+    ran: LoopOutcome,
+    mut times: PhaseTimes,
+) -> Result<RenderOutcome, RenderError> {
+    let Some(film) = ran.film.filter(|f| !f.passes().is_empty()) else {
         return Err(RenderError::Interrupted {
             output,
-            saved_photons,
+            saved_photons: ran.saved_photons,
         });
     };
-    write_outputs(args, &output, film_path.as_deref(), &film, &mut times)?;
+    write_outputs(args, &output, film_path, &film, &mut times)?;
     times.add_counts("write image", &[("passes", film.passes().count())]);
     if let Some(path) = &args.kernel_field {
         times.time("write kernel field", || write_kernel_field(path, &film))?;
     }
+    let last = ran.last_report.as_ref();
     let outcome = RenderOutcome {
         image: film.image(),
         output,
         times,
-        caustic: last_report.as_ref().and_then(|r| r.caustic),
-        caustic_bytes_per_photon: last_report
-            .as_ref()
-            .and_then(|r| r.caustic_bytes_per_photon),
-        global: last_report.as_ref().and_then(|r| r.global),
-        estimator: last_report.as_ref().and_then(|r| r.estimator.clone()),
-        passes: records,
-        interrupted,
-        budget_note,
+        caustic: last.and_then(|r| r.caustic),
+        caustic_bytes_per_photon: last.and_then(|r| r.caustic_bytes_per_photon),
+        global: last.and_then(|r| r.global),
+        estimator: last.and_then(|r| r.estimator.clone()),
+        passes: ran.records,
+        interrupted: ran.interrupted,
+        budget_note: ran.budget_note,
         film,
     };
     if let Some(path) = &args.stats {
@@ -493,24 +298,8 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     Ok(outcome)
 }
 
-/// The pass bar's message: passes held, photons so far, the error so far.
-fn pass_message(
-    film: &Film,
-    records: &[PassRecord],
-    last: &Option<super::pass::PassReport>,
-) -> String {
-    let per_pass = last.as_ref().map_or(0, |r| {
-        r.caustic.map_or(0, |c| c.stored) + r.global.map_or(0, |c| c.stored)
-    });
-    let photons = per_pass * records.len() as u64;
-    let mut m = format!("{} passes, {photons} photons", film.passes().count());
-    if let Some(e) = records.last().and_then(|r| r.relative_mse) {
-        m += &format!(", rel. MSE {e:.3e}");
-    }
-    m
-}
-
-fn write_outputs(
+/// Rewrites `-o` and the film with every pass the film holds.
+pub(super) fn write_outputs(
     args: &RenderArgs,
     output: &Path,
     film_path: Option<&Path>,
@@ -563,36 +352,4 @@ pub fn read_reference(path: &Path, width: u32, height: u32) -> Result<Image, Ren
         )));
     }
     Ok(image)
-}
-
-/// Relative MSE of `image` against `reference` over the RGB channel means (see
-/// [`crate::tradeoff::scene_metrics::relative_mse`]).
-pub fn relative_mse(image: &Image, reference: &Image) -> f64 {
-    let mean = |i: &Image| -> Vec<f64> {
-        i.pixels
-            .iter()
-            .map(|p| crate::density::channel_mean(*p))
-            .collect()
-    };
-    crate::tradeoff::scene_metrics::relative_mse(&mean(image), &mean(reference))
-}
-
-/// What loading repaired or suspects: warnings on stderr, dropped triangles in the table.
-fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseTimes) {
-    let scene = args.scene.display().to_string();
-    for warning in &report.warnings {
-        // pbrt warnings already begin with their file:line:column.
-        if warning.starts_with(&scene) {
-            eprintln!("warning: {warning}");
-        } else {
-            eprintln!("warning: {scene}: {warning}");
-        }
-    }
-    for note in &report.notes {
-        eprintln!("note: {note}");
-    }
-    if report.degenerate_triangles_dropped > 0 {
-        let dropped = report.degenerate_triangles_dropped as u64;
-        times.add_counts("load scene", &[("zero-area triangles dropped", dropped)]);
-    }
 }

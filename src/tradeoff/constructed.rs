@@ -4,10 +4,10 @@
 //! them). Owns only the glue; it must not define regions, draw photons or evaluate kernels
 //! itself, and must not write files.
 
-use super::scene_metrics::relative_mse;
 use super::sweep::{Errors, SweepError, Target};
 use crate::density::{self, Distribution, DistributionName, Grid, Metrics, Regions, Truth};
 use crate::estimate::RadianceEstimate;
+use crate::image_metrics::relative_mse;
 use crate::photon::PhotonMap;
 
 /// `dpm density`'s default region widths (world units): the edge band's half width and the
@@ -58,7 +58,7 @@ impl Target for ConstructedTarget {
         let hidden = indicatif::ProgressBar::hidden();
         density::grid::evaluate(&self.grid, map, estimate, &hidden)
             .into_iter()
-            .map(density::channel_mean)
+            .map(crate::image_metrics::channel_mean)
             .collect()
     }
 

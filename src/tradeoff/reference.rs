@@ -207,7 +207,7 @@ pub fn ensure(
     }
     bar.finish_and_clear();
     let image = mean_image(target, &sums, settings.passes);
-    let half_change = half.map(|h| crate::render::pipeline::relative_mse(&h, &image));
+    let half_change = half.map(|h| crate::image_metrics::image_relative_mse(&h, &image));
     std::fs::create_dir_all(cache_dir).map_err(|source| ReferenceError::CacheDir {
         path: cache_dir.to_path_buf(),
         source,

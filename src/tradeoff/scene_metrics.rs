@@ -14,31 +14,16 @@
 //!   sides of every caustic edge are in it.
 //! - *flat*: lit pixels outside the edge band.
 //!
-//! Errors: RMSE over every pixel; relative MSE ([`relative_mse`]); RMSE over the edge band;
+//! Errors: RMSE over every pixel; relative MSE ([`crate::image_metrics::relative_mse`]); RMSE over the edge band;
 //! flat-region noise = the standard deviation over the flat pixels of (estimate − reference) /
 //! reference, relative because a caustic's brightness spans orders of magnitude.
 
 use super::sweep::Errors;
+use crate::image_metrics::relative_mse;
 
 pub const LIT_FRACTION: f64 = 0.02;
 pub const EDGE_RELATIVE_GRADIENT: f64 = 0.2;
 pub const EDGE_DILATION: usize = 2;
-
-/// Relative MSE: the mean over pixels of (e − r)² / (r² + ε²), ε = 0.1 × the mean of the
-/// reference, so pixels the reference leaves dark still count (light leaking into them is an
-/// error) without dividing by zero.
-pub fn relative_mse(estimate: &[f64], reference: &[f64]) -> f64 {
-    assert_eq!(estimate.len(), reference.len());
-    let n = reference.len().max(1) as f64;
-    let eps = 0.1 * reference.iter().sum::<f64>() / n;
-    let eps2 = (eps * eps).max(f64::MIN_POSITIVE);
-    estimate
-        .iter()
-        .zip(reference)
-        .map(|(e, r)| (e - r).powi(2) / (r * r + eps2))
-        .sum::<f64>()
-        / n
-}
 
 /// The pixel classes of a reference image (row by row, `width` × `height`).
 #[derive(Clone, Debug, PartialEq)]
@@ -194,15 +179,5 @@ mod tests {
         let e = scene_errors(&brighter, &image, &r);
         assert!(e.flat_noise < 1e-12, "a uniform 10% bias is not noise");
         assert!(e.rmse > 0.0 && e.relative_mse > 0.0);
-    }
-
-    #[test]
-    fn relative_mse_is_scale_free() {
-        let r = [1.0, 2.0, 0.0, 4.0];
-        let e = [1.5, 1.0, 0.2, 4.0];
-        let scaled = |v: &[f64]| v.iter().map(|x| x * 1000.0).collect::<Vec<_>>();
-        let a = relative_mse(&e, &r);
-        let b = relative_mse(&scaled(&e), &scaled(&r));
-        assert!((a - b).abs() < 1e-12 * a.max(1.0), "{a} vs {b}");
     }
 }

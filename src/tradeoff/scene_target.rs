@@ -12,10 +12,10 @@
 
 use super::scene_metrics::{SceneRegions, scene_errors};
 use super::sweep::{Errors, SweepError, Target};
-use crate::density::channel_mean;
 use crate::embree::EmbreeError;
 use crate::estimate::RadianceEstimate;
 use crate::image_io::Image;
+use crate::image_metrics::channel_mean;
 use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, trace_map};
 use crate::render::integrator::{EstimatedMap, Indirect, Integrator};

@@ -104,3 +104,71 @@ pub fn pfm_pixels(path: &Path) -> (usize, usize, Vec<f32>) {
     let values = image.pixels.iter().flat_map(|p| p.to_array()).collect();
     (image.width, image.height, values)
 }
+
+/// A running `dpm` whose stderr is read line by line as it comes, so a test can wait for the
+/// line that says a stage started (`started: render (…)`) instead of guessing how long it takes.
+pub struct LoggedRun {
+    child: std::process::Child,
+    lines: std::sync::mpsc::Receiver<String>,
+    seen: Vec<String>,
+}
+
+impl LoggedRun {
+    pub fn spawn(command: &mut Command) -> Self {
+        use std::io::BufRead;
+        let mut child = command
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("the dpm binary runs");
+        let stderr = child.stderr.take().unwrap();
+        let (send, lines) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr).lines() {
+                let Ok(line) = line else { break };
+                if send.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Self {
+            child,
+            lines,
+            seen: Vec::new(),
+        }
+    }
+
+    /// Waits for the `n`-th line (counting from 1, over the whole run) that starts with
+    /// `prefix`; panics, with what it printed, if the process ends first.
+    pub fn wait_for_line(&mut self, prefix: &str, n: usize) {
+        let count = |seen: &[String]| seen.iter().filter(|l| l.starts_with(prefix)).count();
+        while count(&self.seen) < n {
+            match self.lines.recv() {
+                Ok(line) => self.seen.push(line),
+                Err(_) => panic!(
+                    "dpm ended before printing {prefix:?} {n} times:\n{}",
+                    self.seen.join("\n")
+                ),
+            }
+        }
+    }
+
+    /// Sends SIGINT, as Ctrl-C does.
+    pub fn interrupt(&self) {
+        let kill = Command::new("kill")
+            .args(["-INT", &self.child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+    }
+
+    /// Waits for the process to end; its whole stderr is in the output.
+    pub fn finish(mut self) -> Output {
+        let status = self.child.wait().unwrap();
+        self.seen.extend(self.lines.iter());
+        Output {
+            status,
+            stdout: Vec::new(),
+            stderr: self.seen.join("\n").into_bytes(),
+        }
+    }
+}

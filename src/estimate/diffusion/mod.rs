@@ -21,6 +21,7 @@
 //! one (standard deviation about 1.8× at the default floor with N = 1000) in exchange for
 //! losing the blur (see `tests/estimate_diffusion.rs`).
 
+pub mod field_colour;
 pub mod gradient;
 mod scan;
 pub mod sites;

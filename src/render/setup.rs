@@ -1,0 +1,243 @@
+//! What a render decides once, before its first pass: the scene loaded into an Embree world,
+//! the settings every pass shares and the film header they imply, where this run's passes
+//! start (pass 0, `--first-pass`, or the end of a `--resume`d film, with pass 0's base radii),
+//! and the pixel plan of the pilot rays. Owns those decisions; the passes themselves are
+//! [`super::pass_loop`]'s, and nothing here traces photons except the pass-0 maps a late start
+//! needs for its radii.
+
+use super::args::{DEFAULT_GLOBAL_PHOTONS, DEFAULT_RADIUS_K, RenderArgs};
+use super::camera::PinholeCamera;
+use super::film::{Film, FilmHeader};
+use super::film_file;
+use super::memory_budget::check_memory;
+use super::pass::{BaseRadii, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
+use super::pilots::PixelPlan;
+use super::pipeline::RenderError;
+use super::schedule::Schedule;
+use crate::estimate::settings::EstimatorKind;
+use crate::image_io::ImageFormat;
+use crate::photon::store::{self, MapInfo};
+use crate::photon::tracer::MapKind;
+use crate::scene::{self, Material};
+use crate::timing::PhaseTimes;
+use crate::world::World;
+use std::path::Path;
+
+/// Loads the scene (at `--resolution` if given, the vertical field of view kept), reports what
+/// loading repaired, and builds its Embree world; returns it with the scene's fingerprint.
+pub fn load_world(args: &RenderArgs, times: &mut PhaseTimes) -> Result<(World, u64), RenderError> {
+    let (mut description, report) = times.time("load scene", || {
+        let options = scene::LoadOptions {
+            strict: args.strict,
+        };
+        scene::load_with_options(&args.scene, &options)
+    })?;
+    if let Some((width, height)) = args.resolution {
+        description.camera.width = width;
+        description.camera.height = height;
+    }
+    report_load(args, &report, times);
+    let scene_hash = store::scene_fingerprint(&description);
+    let world = times.time("build Embree scene", || World::new(description))?;
+    Ok((world, scene_hash))
+}
+
+/// What loading repaired or suspects: warnings on stderr, dropped triangles in the table.
+fn report_load(args: &RenderArgs, report: &scene::LoadReport, times: &mut PhaseTimes) {
+    let scene = args.scene.display().to_string();
+    for warning in &report.warnings {
+        // pbrt warnings already begin with their file:line:column.
+        if warning.starts_with(&scene) {
+            eprintln!("warning: {warning}");
+        } else {
+            eprintln!("warning: {scene}: {warning}");
+        }
+    }
+    for note in &report.notes {
+        eprintln!("note: {note}");
+    }
+    if report.degenerate_triangles_dropped > 0 {
+        let dropped = report.degenerate_triangles_dropped as u64;
+        times.add_counts("load scene", &[("zero-area triangles dropped", dropped)]);
+    }
+}
+
+/// The settings every pass of this render shares, and what the film records of them.
+pub struct Wiring {
+    pub settings: RenderSettings,
+    /// The photon maps each pass traces.
+    pub wanted: Vec<MapInfo>,
+    pub schedule: Schedule,
+    pub scene_hash: u64,
+    /// Whether the film accumulates the diffusion kernel's field.
+    pub kernel_field: bool,
+}
+
+impl Wiring {
+    /// Wires the flags to the scene: the settings, the caustic guide (learnt here, once), the
+    /// maps and the up-front memory check.
+    pub fn new(
+        args: &RenderArgs,
+        world: &mut World,
+        scene_hash: u64,
+        output: &Path,
+        times: &mut PhaseTimes,
+    ) -> Result<Self, RenderError> {
+        let settings = render_settings(args, world);
+        super::caustic_guide::learn(world, &settings, args.seed, times);
+        let wanted = wanted_maps(&settings, world);
+        check_memory(settings.estimator.estimator, world, &wanted)?;
+        // The kernel field needs the diffusion estimate and a caustic map to steer it.
+        let kernel_field = settings.estimator.estimator == EstimatorKind::Diffusion
+            && wanted.iter().any(|w| w.kind == MapKind::Caustic)
+            && (args.kernel_field.is_some()
+                || ImageFormat::from_path(output).ok() == Some(ImageFormat::Exr));
+        Ok(Self {
+            schedule: Schedule::new(settings.alpha, args.seed),
+            settings,
+            wanted,
+            scene_hash,
+            kernel_field,
+        })
+    }
+
+    /// The film header of this render once pass 0's base radii are known.
+    pub fn header(&self, args: &RenderArgs, world: &World, radii: BaseRadii) -> FilmHeader {
+        let camera = &world.description.camera;
+        FilmHeader {
+            scene_file: args.scene.display().to_string(),
+            scene_hash: self.scene_hash,
+            seed: args.seed,
+            width: camera.width as usize,
+            height: camera.height as usize,
+            settings: self.settings.clone(),
+            radii,
+            kernel_field: self.kernel_field,
+        }
+    }
+
+    /// Where this run's passes start.
+    pub fn start(
+        &self,
+        args: &RenderArgs,
+        world: &World,
+        times: &mut PhaseTimes,
+    ) -> Result<Start, RenderError> {
+        let mut start = Start {
+            film: None,
+            first: args.first_pass,
+            radii: None,
+        };
+        if let Some(path) = &args.resume {
+            let resumed = times.time("read film", || film_file::read(path))?;
+            let probe = self.header(args, world, resumed.header.radii);
+            if let Some(field) = resumed.header.first_difference(&probe) {
+                return Err(RenderError::Invalid(format!(
+                    "--resume {}: the film's {field} differs from this render's; it cannot be continued",
+                    path.display()
+                )));
+            }
+            start.first = resumed.passes().end();
+            start.radii = Some(resumed.header.radii);
+            start.film = Some(resumed);
+        } else if start.first > 0 {
+            start.radii = Some(self.pass_zero_radii(world, times)?);
+        }
+        Ok(start)
+    }
+
+    /// Pass 0's radii for a run that starts later: given ones need no maps, derived ones need
+    /// pass 0's, traced once.
+    fn pass_zero_radii(
+        &self,
+        world: &World,
+        times: &mut PhaseTimes,
+    ) -> Result<BaseRadii, RenderError> {
+        let given = self.settings.estimator.radius.is_some()
+            || !self.wanted.iter().any(|w| w.kind == MapKind::Caustic);
+        let global = self
+            .wanted
+            .iter()
+            .any(|w| matches!(w.kind, MapKind::Global { .. }));
+        let maps = if given && !global {
+            PassMaps::default()
+        } else {
+            trace_pass_maps(world, &self.settings, &self.schedule, 0, times)
+        };
+        Ok(BaseRadii::resolve(&self.settings, &maps)?)
+    }
+}
+
+/// Where a run's passes start: the film it continues (none yet for a fresh render: its header
+/// needs pass 0's radii), its first pass, and pass 0's radii when already known.
+pub struct Start {
+    pub film: Option<Film>,
+    pub first: u64,
+    pub radii: Option<BaseRadii>,
+}
+
+/// The settings every pass of this render uses.
+fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
+    let diffuse_objects = world
+        .description
+        .shapes
+        .iter()
+        .filter(|s| {
+            let m = match s {
+                scene::Shape::Sphere { material, .. } => *material,
+                scene::Shape::Triangles(t) => t.material,
+            };
+            matches!(world.material(m), Material::Diffuse { .. })
+        })
+        .count();
+    RenderSettings {
+        caustic_photons: args.caustic_photons,
+        global_photons: args.global_photons.unwrap_or(if diffuse_objects >= 2 {
+            DEFAULT_GLOBAL_PHOTONS
+        } else {
+            0
+        }),
+        spp: args.spp,
+        max_depth: args.max_depth,
+        final_gather: args.final_gather,
+        global_k: args.global_k,
+        irradiance_stride: args.irradiance_stride,
+        light_samples: args.light_samples,
+        glass_split_depth: args.glass_split_depth,
+        emission_samples: args.emission_samples,
+        edge_samples: args.edge_samples,
+        guide_paths: if args.caustic_photons > 0 {
+            args.guide_paths
+        } else {
+            0
+        },
+        alpha: args.ppm_alpha,
+        estimator: args.estimate.settings_with_radius_k(DEFAULT_RADIUS_K),
+    }
+}
+
+/// The pilot rays' plan of every pixel (once per render); None when interrupted.
+pub fn survey_pixels(
+    camera: &PinholeCamera,
+    world: &World,
+    settings: &RenderSettings,
+    times: &mut PhaseTimes,
+) -> Option<PixelPlan> {
+    let plan = times.time("pilot rays", || {
+        PixelPlan::survey(
+            camera,
+            world,
+            settings.max_depth,
+            settings.emission_samples,
+            settings.edge_samples,
+        )
+    })?;
+    times.add_counts(
+        "pilot rays",
+        &[
+            ("emission pixels", plan.emission_pixels() as u64),
+            ("edge pixels", plan.edge_pixels() as u64),
+        ],
+    );
+    Some(plan)
+}
