@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Measures render settings against references, for choosing the defaults (BENCHMARKS.md,
-"Whole scenes: the defaults").
+"Whole scenes and the defaults").
 
     scripts/defaults-table.py [--repeat N] [--seed S] DIR OLD_DPM NEW_DPM SCENE[,SCENE...] [CONFIG ...]
 
