@@ -1,4 +1,4 @@
-//! The measurements of the README's constructed-distribution table: every estimate of the table on a
+//! The measurements of the constructed-distribution table (docs/guide.md, "The density experiment"): every estimate of the table on a
 //! built-in distribution, each written as a PNG, and the metrics as a Markdown table.
 //!
 //! `cargo run --release --example density_table -- [DISTRIBUTION] [COUNT] [SIZE] [IMAGE_DIR] [FILTER]`

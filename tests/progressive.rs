@@ -481,7 +481,7 @@ fn dimensionless_diffusivity_holds_as_the_radius_shrinks() {
     }
 }
 
-/// The defaults chosen by measurement (README, "Choosing the defaults"): 8 passes of 75,000
+/// The defaults chosen by measurement (docs/guide.md, "Choosing settings"): 8 passes of 75,000
 /// caustic and 300,000 global photons, the global map shown directly, 4 light samples, 4
 /// camera samples in edge pixels, the caustic radius of 100 photons; one pass with a photon
 /// map file; as many as the budget holds with --time alone.

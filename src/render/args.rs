@@ -321,23 +321,23 @@ pub const MAX_LIGHT_SAMPLES: u32 = 4096;
 /// Largest `--irradiance-stride`: beyond it the table is too sparse to stand for the map.
 pub const MAX_IRRADIANCE_STRIDE: usize = 1 << 16;
 
-/// Passes per render by default: chosen by measurement (README, "Choosing the defaults").
+/// Passes per render by default: chosen by measurement (docs/guide.md, "Choosing settings").
 pub const DEFAULT_PASSES: u64 = 8;
 /// `--k` of the fixed-radius caustic estimates by default: their radius holds about this
-/// many photons where photons typically are (README, "Choosing the defaults").
+/// many photons where photons typically are (docs/guide.md, "Choosing settings").
 pub const DEFAULT_RADIUS_K: usize = 100;
 /// Stored caustic photons per pass by default.
 pub const DEFAULT_CAUSTIC_PHOTONS: usize = 75_000;
 /// Stored global photons per pass by default (scenes with two or more diffuse objects).
 pub const DEFAULT_GLOBAL_PHOTONS: usize = 300_000;
-/// Shadow rays per area light at each diffuse eye hit by default (README, "Choosing the
-/// defaults").
+/// Shadow rays per area light at each diffuse eye hit by default (docs/guide.md,
+/// "Choosing settings").
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 4;
-/// Glass hits that split an eye path by default (README, "Whole scenes").
+/// Glass hits that split an eye path by default (BENCHMARKS.md, "Whole scenes and the defaults").
 pub const DEFAULT_GLASS_SPLIT_DEPTH: u32 = 1000;
-/// Emission samples per flagged pixel and pass by default (README, "Choosing the defaults").
+/// Emission samples per flagged pixel and pass by default (docs/guide.md, "Choosing settings").
 pub const DEFAULT_EMISSION_SAMPLES: u32 = 16;
-/// Camera samples per pass in edge pixels by default (README, "Choosing the defaults").
+/// Camera samples per pass in edge pixels by default (docs/guide.md, "Choosing settings").
 pub const DEFAULT_EDGE_SAMPLES: u32 = 4;
 
 /// Pilot paths of the caustic guide: about 100 a cone cell of a light aimed at eight targets.

@@ -2,7 +2,7 @@
 //! render (`photon::guide`, `world::aim_guide`), and the phase that learns it before pass 0.
 //! Owns that valuation; must not trace photons or shade pixels.
 //!
-//! The image's error is relative (README, "Choosing the defaults": squared error over the
+//! The image's error is relative (the relative MSE of `crate::image_metrics`: squared error over the
 //! reference's square plus ε², ε a tenth of the image's mean). A photon's share of a caustic
 //! estimate's variance is the same wherever it lands, so where the image is bright it adds
 //! little relative error, and where it is dim much. Spreading N photons with density w·C over

@@ -19,7 +19,7 @@ use std::sync::Arc;
 
 /// Rings and sectors per cone: 64 cells a cone, 512 for a light aimed at eight targets. Finer
 /// cells learnt from as many pilots are noisier, and were no better on the metal ring (16 a side
-/// with 100k pilots, 32 with 400k; BENCHMARKS.md, session 12).
+/// with 100k pilots, 32 with 400k; BENCHMARKS.md, "The caustic guide's cost").
 pub const SIDE: usize = 8;
 /// Cells per cone.
 pub const CELLS: usize = SIDE * SIDE;
