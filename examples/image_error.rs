@@ -1,6 +1,6 @@
 //! The error `dpm render --reference` reports, for images made elsewhere (an older dpm, another
 //! renderer): relative MSE of IMAGE against REFERENCE, the mean over pixels of (e − r)²/(r² + ε²)
-//! of the RGB channel means, ε = 10% of the reference's mean (`dpm::render::pipeline::relative_mse`).
+//! of the RGB channel means, ε = 10% of the reference's mean (`dpm::image_metrics::image_relative_mse`).
 //!
 //! `cargo run --release --example image_error -- IMAGE.pfm|.exr REFERENCE.pfm|.exr`
 
