@@ -202,7 +202,8 @@ pub fn emission_rays(
         .collect()
 }
 
-/// Traces paths until `target` photons are stored (or `max_paths` are emitted), and builds the map.
+/// Traces paths until `target` photons are stored (or [`MAX_PATHS_PER_PHOTON`] times `target`
+/// paths are emitted), and builds the map.
 /// Stops early with an empty map when an interruption is requested ([`crate::interrupt`]);
 /// the caller must check for it and discard the map.
 pub fn trace_map(
@@ -310,6 +311,9 @@ fn chunk_len(batch: u64) -> u64 {
     (batch / (threads * 64)).clamp(512, 16_384)
 }
 
+/// Paths a wanted photon past which a map is left short.
+pub const MAX_PATHS_PER_PHOTON: u64 = 64;
+
 /// The tracing half of [`trace_map`], kept apart so that it can be timed on its own.
 ///
 /// Paths run in batches sized to finish the pass; a batch is split into chunks of consecutive
@@ -322,7 +326,12 @@ pub fn trace_photons(
     seed: u64,
     progress: &ProgressBar,
 ) -> TracedPhotons {
-    let max_paths = (target as u64).saturating_mul(1000).max(1_000_000);
+    // Under an open sky most paths leave the scene and store nothing: past this many paths a
+    // wanted photon the map stays short, still right (flux is over the paths emitted), rather
+    // than the pass spending minutes on escaping rays.
+    let max_paths = (target as u64)
+        .saturating_mul(MAX_PATHS_PER_PHOTON)
+        .max(1_000_000);
     let Some(emitter) = Emitter::new(world, kind, seed) else {
         return TracedPhotons::new(Vec::new(), TraceCounts::default(), 0);
     };

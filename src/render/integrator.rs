@@ -155,7 +155,7 @@ impl Integrator<'_> {
             ..Radiance::default()
         };
         let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-            return counted(self.world.background());
+            return counted(self.world.background(dir));
         };
         let m = match hit.surface {
             Surface::Light(l) => {
@@ -260,7 +260,7 @@ impl Integrator<'_> {
         let mut throughput = Vec3::ONE;
         for _ in 0..=self.max_depth {
             let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-                return throughput * self.world.background();
+                return throughput * self.world.background(dir);
             };
             let m = match hit.surface {
                 Surface::Light(l) => {

@@ -191,7 +191,7 @@ impl<'w> Survey<'w> {
                 break;
             }
             let Some(closest) = world.closest_hit(o, d, 0.0, f32::INFINITY) else {
-                pilot.emitting += u32::from(world.background() != Vec3::ZERO);
+                pilot.emitting += u32::from(world.background(d) != Vec3::ZERO);
                 pilot.shape.add(u64::MAX);
                 last_rays.push((o, d, code));
                 continue;

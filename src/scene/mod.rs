@@ -12,6 +12,7 @@
 //! OBJ/MTL files, `transform` places meshes in the world.
 
 mod document;
+pub mod environment;
 pub mod files;
 mod format;
 mod mesh;
@@ -21,6 +22,7 @@ mod rules;
 pub(crate) mod transform;
 mod validate;
 
+pub use environment::{EnvironmentMap, SphereMapping};
 pub use rules::{InvalidField, check_light, check_material, check_mesh};
 
 use glam::Vec3;
@@ -98,6 +100,9 @@ pub enum Light {
     /// Constant radiance from every direction (pbrt's "infinite" with a constant L),
     /// W/(m² sr) per channel. Eye rays that leave the scene see it.
     Environment { radiance: Vec3 },
+    /// Radiance from every direction by an image (pbrt's "infinite" with `mapname` or
+    /// `filename`). Eye rays that leave the scene see it.
+    EnvironmentMap(EnvironmentMap),
     /// A diffuse emitter over a triangle mesh (pbrt's AreaLightSource "diffuse" on a
     /// trianglemesh or plymesh): uniform radiance over its area, `power` the total flux. It
     /// emits on the side its triangles' geometric normals point to (counter-clockwise winding,

@@ -103,6 +103,7 @@ pub fn check_light(light: &Light) -> Result<(), InvalidField> {
         Light::Environment { radiance } => {
             flux("radiance", *radiance, "W/(m² sr)")?;
         }
+        Light::EnvironmentMap(map) => environment_map(map)?,
         Light::Mesh { mesh, power, .. } => {
             check_mesh(mesh).map_err(|e| e.within("mesh"))?;
             flux("power", *power, WATTS)?;
@@ -195,6 +196,43 @@ pub(crate) fn positive(field: &str, x: f32) -> Checked<f32> {
 }
 
 /// A light's flux, irradiance or radiance in `unit` per channel: finite, >= 0, not all zero.
+/// An environment map: a size that matches its texels, finite non-negative texels, not all
+/// black, and an orthonormal frame.
+fn environment_map(map: &crate::scene::EnvironmentMap) -> Checked<()> {
+    if map.width == 0 || map.height == 0 || map.texels.len() != (map.width * map.height) as usize {
+        return Err(InvalidField::new(
+            "texels",
+            format!(
+                "{} texels for a {}x{} image",
+                map.texels.len(),
+                map.width,
+                map.height
+            ),
+        ));
+    }
+    if let Some(i) = (map.texels.iter()).position(|t| !(t.is_finite() && t.min_element() >= 0.0)) {
+        return Err(InvalidField::new(
+            format!("texels[{i}]"),
+            format!("{} W/(m² sr) must be finite and >= 0", map.texels[i]),
+        ));
+    }
+    if map.texels.iter().all(|&t| t == Vec3::ZERO) {
+        return Err(InvalidField::new(
+            "texels",
+            "every texel is black: the light emits nothing",
+        ));
+    }
+    let m = map.light_to_world;
+    let off = (m.transpose() * m - glam::Mat3::IDENTITY).to_cols_array();
+    if !off.iter().all(|x| x.abs() < 1e-4) {
+        return Err(InvalidField::new(
+            "light_to_world",
+            "is not orthonormal (a rotation, optionally with a mirror)",
+        ));
+    }
+    Ok(())
+}
+
 pub(crate) fn flux(field: &str, rgb: Vec3, unit: &str) -> Checked<Vec3> {
     for (i, x) in rgb.to_array().into_iter().enumerate() {
         if !(x.is_finite() && x >= 0.0) {

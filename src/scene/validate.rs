@@ -410,7 +410,9 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
                     let hi = mesh.positions.iter().fold(Vec3::MIN, |a, &p| a.max(p));
                     0.5 * (lo + hi)
                 }
-                Light::Distant { .. } | Light::Environment { .. } => continue,
+                Light::Distant { .. } | Light::Environment { .. } | Light::EnvironmentMap(_) => {
+                    continue;
+                }
             };
             if inside(at) {
                 let what = match shape {

@@ -171,8 +171,11 @@ pub struct World {
     pub bounds: BoundingSphere,
     /// The scene's lights prepared for sampling, in [`SceneDescription::lights`]' order.
     pub light_sources: Vec<LightSource>,
-    /// What a ray that leaves the scene sees: the environments' radiance summed.
+    /// What a ray that leaves the scene sees whatever its direction: the constant
+    /// environments' radiance summed.
     background: Vec3,
+    /// The image environments, whose radiance a leaving ray adds by its direction.
+    sky_maps: Vec<LightSource>,
 }
 
 impl World {
@@ -236,7 +239,9 @@ impl World {
                     hi = hi.max(*position);
                     continue;
                 }
-                Light::Distant { .. } | Light::Environment { .. } => continue,
+                Light::Distant { .. } | Light::Environment { .. } | Light::EnvironmentMap(_) => {
+                    continue;
+                }
                 Light::Sphere { center, radius, .. } => {
                     builder.add_spheres(&[(*center, *radius)])?;
                     normals.push(sphere_normals(*center, *radius));
@@ -311,6 +316,10 @@ impl World {
             .iter()
             .map(LightSource::radiance_at_infinity)
             .sum();
+        let sky_maps = (light_sources.iter())
+            .filter(|l| l.has_directional_sky())
+            .cloned()
+            .collect();
         Ok(Self {
             description,
             accel,
@@ -322,6 +331,7 @@ impl World {
             bounds,
             light_sources,
             background,
+            sky_maps,
         })
     }
 
@@ -335,9 +345,20 @@ impl World {
         &self.description.materials[id as usize]
     }
 
-    /// Radiance arriving along a ray that leaves the scene (the environment's; black without).
-    pub fn background(&self) -> Vec3 {
-        self.background
+    /// Radiance arriving along a ray that leaves the scene along the unit `direction` (the
+    /// environments'; black without).
+    #[inline]
+    pub fn background(&self, direction: Vec3) -> Vec3 {
+        let mut sky = self.background;
+        for map in &self.sky_maps {
+            sky += map.sky_radiance(direction);
+        }
+        sky
+    }
+
+    /// Whether any ray leaving the scene sees light.
+    pub fn has_background(&self) -> bool {
+        self.background != Vec3::ZERO || !self.sky_maps.is_empty()
     }
 
     /// Whether any object is a mirror or glass (so caustic photons exist).

@@ -123,6 +123,17 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
                 h.u32(5);
                 h.vec3(*radiance);
             }
+            Light::EnvironmentMap(map) => {
+                h.u32(7);
+                h.u32(map.width);
+                h.u32(map.height);
+                h.u32(map.mapping as u32);
+                map.light_to_world
+                    .to_cols_array()
+                    .iter()
+                    .for_each(|&x| h.f32(x));
+                map.texels.iter().for_each(|&t| h.vec3(t));
+            }
             Light::Mesh {
                 mesh,
                 power,

@@ -58,7 +58,12 @@ impl StartDiscs {
     /// A photon's start travelling along unit `direction` (with `tangents` its [`basis`]), and
     /// the area it stands for.
     #[inline]
-    fn start(&self, direction: Vec3, tangents: (Vec3, Vec3), rng: &mut Rng) -> (Vec3, f32) {
+    pub(super) fn start(
+        &self,
+        direction: Vec3,
+        tangents: (Vec3, Vec3),
+        rng: &mut Rng,
+    ) -> (Vec3, f32) {
         let (t, b) = tangents;
         let center = self.scene.center;
         let back = direction * (START_DISTANCE * self.scene.radius);

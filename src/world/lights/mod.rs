@@ -5,10 +5,11 @@
 //!
 //! Inside: `point` holds point and spot lights, `area` the sphere, quad and mesh emitters,
 //! `infinite` the distant light and the environment, whose photons start on discs outside the
-//! scene's bounding sphere. A [`LightSource`] is one scene light prepared once per world; a
+//! scene's bounding sphere, `environment_map` an image environment's importance sampling. A [`LightSource`] is one scene light prepared once per world; a
 //! [`LightEmitter`] is one light's photons prepared once per map (aimed or not).
 
 mod area;
+mod environment_map;
 mod infinite;
 mod point;
 #[cfg(test)]
@@ -103,6 +104,7 @@ enum Kind {
     Mesh(Arc<area::MeshLight>),
     Distant(infinite::Distant),
     Environment(infinite::Environment),
+    EnvironmentMap(environment_map::EnvironmentMapLight),
 }
 
 impl LightSource {
@@ -152,6 +154,9 @@ impl LightSource {
             Light::Environment { radiance } => {
                 Kind::Environment(infinite::Environment::new(radiance, scene))
             }
+            Light::EnvironmentMap(ref map) => {
+                Kind::EnvironmentMap(environment_map::EnvironmentMapLight::new(map, scene))
+            }
             Light::Mesh {
                 ref mesh,
                 power,
@@ -171,6 +176,7 @@ impl LightSource {
             Kind::Mesh(mesh) => mesh.power(),
             Kind::Distant(distant) => distant.power(),
             Kind::Environment(environment) => environment.power(),
+            Kind::EnvironmentMap(map) => map.power(),
         }
     }
 
@@ -200,9 +206,11 @@ impl LightSource {
                 *power / (std::f32::consts::PI * area::quad_area_normal(*edge_u, *edge_v).0)
             }
             Kind::Mesh(mesh) => mesh.emitted_radiance(cos_out),
-            Kind::Point { .. } | Kind::Spot(_) | Kind::Distant(_) | Kind::Environment(_) => {
-                Vec3::ZERO
-            }
+            Kind::Point { .. }
+            | Kind::Spot(_)
+            | Kind::Distant(_)
+            | Kind::Environment(_)
+            | Kind::EnvironmentMap(_) => Vec3::ZERO,
         }
     }
 
@@ -230,14 +238,31 @@ impl LightSource {
                 point: mesh.largest_triangle_centroid(),
             },
             Kind::Distant(distant) => LightShape::Direction(distant.towards()),
-            Kind::Environment(_) => LightShape::Everywhere,
+            Kind::Environment(_) | Kind::EnvironmentMap(_) => LightShape::Everywhere,
         }
     }
 
-    /// Radiance a ray that leaves the scene sees from this light (the environment's).
+    /// Radiance a ray that leaves the scene sees from this light whatever its direction (a
+    /// constant environment's).
     pub fn radiance_at_infinity(&self) -> Vec3 {
         match &self.0 {
             Kind::Environment(environment) => environment.radiance(),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Whether what a ray leaving the scene sees of this light depends on its direction (an
+    /// image environment).
+    pub fn has_directional_sky(&self) -> bool {
+        matches!(self.0, Kind::EnvironmentMap(_))
+    }
+
+    /// Radiance a ray leaving the scene along the unit `direction` sees from an image
+    /// environment (zero from every other light).
+    #[inline]
+    pub fn sky_radiance(&self, direction: Vec3) -> Vec3 {
+        match &self.0 {
+            Kind::EnvironmentMap(map) => map.radiance(direction),
             _ => Vec3::ZERO,
         }
     }
@@ -262,6 +287,7 @@ impl LightSource {
             Kind::Mesh(mesh) => mesh.incident(x, u),
             Kind::Distant(distant) => Some(distant.incident()),
             Kind::Environment(environment) => environment.incident(n, u),
+            Kind::EnvironmentMap(map) => map.incident(n, u),
         }
     }
 }
@@ -288,6 +314,7 @@ enum Source {
     Mesh(Arc<area::MeshLight>),
     Distant(infinite::DistantEmitter),
     Environment(infinite::EnvironmentEmitter),
+    EnvironmentMap(environment_map::EnvironmentMapEmitter),
 }
 
 impl LightEmitter {
@@ -315,6 +342,9 @@ impl LightEmitter {
             Kind::Environment(environment) => {
                 Source::Environment(infinite::EnvironmentEmitter::new(environment, aim))
             }
+            Kind::EnvironmentMap(map) => {
+                Source::EnvironmentMap(environment_map::EnvironmentMapEmitter::new(map, aim))
+            }
         };
         Self {
             source,
@@ -331,7 +361,11 @@ impl LightEmitter {
             Source::Point(point) => point.cones(),
             Source::Spot(spot) => spot.cones(),
             Source::Sphere(sphere) => sphere.cones(),
-            Source::Quad(_) | Source::Mesh(_) | Source::Distant(_) | Source::Environment(_) => None,
+            Source::Quad(_)
+            | Source::Mesh(_)
+            | Source::Distant(_)
+            | Source::Environment(_)
+            | Source::EnvironmentMap(_) => None,
         }
     }
 
@@ -342,7 +376,11 @@ impl LightEmitter {
             Source::Point(point) => point.cones_mut(),
             Source::Spot(spot) => spot.cones_mut(),
             Source::Sphere(sphere) => sphere.cones_mut(),
-            Source::Quad(_) | Source::Mesh(_) | Source::Distant(_) | Source::Environment(_) => None,
+            Source::Quad(_)
+            | Source::Mesh(_)
+            | Source::Distant(_)
+            | Source::Environment(_)
+            | Source::EnvironmentMap(_) => None,
         };
         cones.map(|c| c.guide(cells)).is_some()
     }
@@ -360,6 +398,7 @@ impl LightEmitter {
             Source::Mesh(mesh) => mesh.emit(&self.aim, rng),
             Source::Distant(distant) => distant.emit(rng),
             Source::Environment(environment) => environment.emit(rng),
+            Source::EnvironmentMap(map) => map.emit(rng),
         }
     }
 }

@@ -14,7 +14,7 @@ use std::f32::consts::PI;
 
 impl Mapper<'_> {
     /// `I` or `L` (default 1) times `scale` (an RGB in pbrt-v3, a float in pbrt-v4).
-    fn emission(&self, item: &Item, name: &str) -> Result<Vec3, SceneError> {
+    pub(super) fn emission(&self, item: &Item, name: &str) -> Result<Vec3, SceneError> {
         let p = |e| param_error(&item.at, "LightSource", e);
         let value = item.params.colour(name).map_err(p)?.unwrap_or(Vec3::ONE);
         let scale = item.params.colour("scale").map_err(p)?.unwrap_or(Vec3::ONE);
@@ -105,19 +105,15 @@ impl Mapper<'_> {
                 }
             }
             "infinite" => {
-                for image in ["mapname", "filename"] {
-                    if item.params.at(image).is_some() {
-                        return Err(value_error(
-                            item,
-                            "LightSource",
-                            image,
-                            "image environment maps are not supported: give a constant \"rgb L\""
-                                .into(),
-                        ));
-                    }
-                }
                 item.params.integer("samples").map_err(p)?;
                 item.params.integer("nsamples").map_err(p)?;
+                if let Some(image) = ["mapname", "filename"]
+                    .into_iter()
+                    .find(|&image| item.params.at(image).is_some())
+                {
+                    let light = self.environment_map(item, image, ctm)?;
+                    return self.checked(item, "LightSource", light);
+                }
                 // pbrt-v4's illuminance E sets the radiance so that an upward surface gets E.
                 let radiance = match item.params.float("illuminance").map_err(p)? {
                     Some(e) => normalised(self.emission(item, "L")?) * (e / PI),

@@ -4,6 +4,7 @@
 //! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
 //! Owns the mapping; must not parse text.
 
+mod environment;
 mod lights;
 mod materials;
 mod shapes;

@@ -1,14 +1,18 @@
 //! The image output stage: a linear-RGB [`Image`] and the writers for PNG (tone-mapped sRGB),
-//! OpenEXR (linear f32 or f16) and PFM (linear f32), chosen by the file extension, plus a PFM
-//! reader. Every write is atomic: the bytes go to a temporary file in the destination directory,
+//! OpenEXR (linear f32 or f16) and PFM (linear f32), chosen by the file extension, and the
+//! readers (`read`: dpm's own PFM/EXR outputs, and the EXR, PFM, PNG and TGA images scenes name). Every write is atomic: the bytes go to a temporary file in the destination directory,
 //! which is synced and then renamed over the destination, so an existing file is never left
 //! half-overwritten. Owns pixel storage and file formats only; it must not know about photons,
 //! estimates, cameras or scenes.
 
+mod read;
+
+pub use read::{SceneImageFormat, decode_linear, read_image, read_pfm, srgb_to_linear};
+
 use glam::Vec3;
 use std::ffi::OsStr;
 use std::fs::{self, File, OpenOptions};
-use std::io::{self, BufWriter, Read, Write};
+use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -406,108 +410,4 @@ pub fn write_exr_channels(
             .to_buffered(out)
             .map_err(|e| e.to_string())
     })
-}
-
-/// Reads a PFM file (colour "PF" or grey "Pf", either byte order) into an image with row 0 at
-/// the top.
-/// Reads a linear image: PFM, or the RGB channels of an EXR's first layer.
-pub fn read_image(path: &Path) -> Result<Image, ImageError> {
-    match ImageFormat::from_path(path)? {
-        ImageFormat::Exr => read_exr_rgb(path),
-        _ => read_pfm(path),
-    }
-}
-
-fn read_exr_rgb(path: &Path) -> Result<Image, ImageError> {
-    use exr::prelude::read_first_rgba_layer_from_file;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _| Image::new(resolution.width(), resolution.height()),
-        |image: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            image.set(pos.x(), pos.y(), Vec3::new(r, g, b))
-        },
-    )
-    .map_err(|e| ImageError::Encode {
-        path: path.to_path_buf(),
-        message: format!("cannot read the EXR: {e}"),
-    })?;
-    Ok(image.layer_data.channel_data.pixels)
-}
-
-pub fn read_pfm(path: &Path) -> Result<Image, ImageError> {
-    let mut bytes = Vec::new();
-    File::open(path)
-        .and_then(|mut f| f.read_to_end(&mut bytes))
-        .map_err(|source| ImageError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-    decode_pfm(&bytes).map_err(|message| ImageError::BadPfm {
-        path: path.to_path_buf(),
-        message,
-    })
-}
-
-fn decode_pfm(bytes: &[u8]) -> Result<Image, String> {
-    // The header is three whitespace-separated tokens after the magic; exactly one whitespace
-    // byte follows the scale, then the raster begins.
-    let mut pos = 0;
-    let mut token = || -> Result<String, String> {
-        while pos < bytes.len() && bytes[pos].is_ascii_whitespace() {
-            pos += 1;
-        }
-        let start = pos;
-        while pos < bytes.len() && !bytes[pos].is_ascii_whitespace() {
-            pos += 1;
-        }
-        if start == pos {
-            return Err("header ends early".into());
-        }
-        let t = String::from_utf8_lossy(&bytes[start..pos]).into_owned();
-        pos += 1;
-        Ok(t)
-    };
-    let channels = match token()?.as_str() {
-        "PF" => 3,
-        "Pf" => 1,
-        other => return Err(format!("magic is {other:?}, expected \"PF\" or \"Pf\"")),
-    };
-    let width: usize = token()?.parse().map_err(|_| "bad width".to_string())?;
-    let height: usize = token()?.parse().map_err(|_| "bad height".to_string())?;
-    let scale: f32 = token()?.parse().map_err(|_| "bad scale".to_string())?;
-    if width == 0 || height == 0 || scale == 0.0 || !scale.is_finite() {
-        return Err(format!("bad header: {width}x{height}, scale {scale}"));
-    }
-    let little_endian = scale < 0.0;
-    let raster = &bytes[pos.min(bytes.len())..];
-    let expected = width
-        .checked_mul(height)
-        .and_then(|n| n.checked_mul(channels * 4))
-        .ok_or("image too large")?;
-    if raster.len() < expected {
-        return Err(format!(
-            "raster has {} bytes, expected {expected}",
-            raster.len()
-        ));
-    }
-    let floats: Vec<f32> = raster[..expected]
-        .chunks_exact(4)
-        .map(|b| {
-            let b = [b[0], b[1], b[2], b[3]];
-            if little_endian {
-                f32::from_le_bytes(b)
-            } else {
-                f32::from_be_bytes(b)
-            }
-        })
-        .collect();
-    // The file's first row is the bottom of the image.
-    Ok(Image::from_fn(width, height, |x, y| {
-        let i = ((height - 1 - y) * width + x) * channels;
-        if channels == 3 {
-            Vec3::new(floats[i], floats[i + 1], floats[i + 2])
-        } else {
-            Vec3::splat(floats[i])
-        }
-    }))
 }
