@@ -19,6 +19,7 @@ pub mod render;
 pub mod resident_memory;
 pub mod sampling;
 pub mod scene;
+pub mod spectrum;
 pub mod timing;
 pub mod tradeoff;
 pub mod world;

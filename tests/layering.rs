@@ -13,6 +13,7 @@ const LAYERS: &[&str] = &[
     "resident_memory",
     "sampling",
     "optics",
+    "spectrum",
     "image_io",
     "image_metrics",
     "scene",

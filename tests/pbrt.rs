@@ -8,13 +8,14 @@ mod support;
 
 use dpm::image_metrics::image_relative_mse as relative_mse;
 use dpm::render::pipeline;
-use dpm::scene::{self, Camera, Handedness, Light, LoadOptions, Material, Shape};
+use dpm::scene::{self, Camera, Handedness, Light, LoadOptions, Material};
 use glam::DVec3;
 use glam::Vec3;
 use proptest::prelude::*;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use support::eye::{PLANE_ALBEDO, check_plane_pixels};
+use support::pbrt::{close, load_text, loads, spheres, world};
 use support::{path_str, render_args, repo_path, scene_with_resolution, write_scene};
 
 fn render(scene: &Path, out: &Path) -> dpm::image_io::Image {
@@ -32,42 +33,6 @@ fn render(scene: &Path, out: &Path) -> dpm::image_io::Image {
     pipeline::run(&render_args(&args))
         .unwrap_or_else(|e| panic!("{}: {e}", scene.display()))
         .image
-}
-
-fn load_text(
-    dir: &Path,
-    text: &str,
-) -> Result<(scene::SceneDescription, scene::LoadReport), scene::SceneError> {
-    let path = write_scene(dir, "scene.pbrt", text);
-    scene::load_with_report(&path)
-}
-
-fn loads(text: &str) -> (scene::SceneDescription, scene::LoadReport) {
-    let dir = tempfile::tempdir().unwrap();
-    load_text(dir.path(), text).unwrap_or_else(|e| panic!("{e}\n{text}"))
-}
-
-const CAMERA: &str = "LookAt 0 1 4  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
-    Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 24\n";
-const LIGHT: &str = "LightSource \"point\" \"point from\" [0 3 0] \"rgb I\" [10 10 10]\n";
-
-fn world(body: &str) -> String {
-    format!("{CAMERA}WorldBegin\n{LIGHT}{body}WorldEnd\n")
-}
-
-fn spheres(scene: &scene::SceneDescription) -> Vec<(Vec3, f32)> {
-    scene
-        .shapes
-        .iter()
-        .filter_map(|s| match s {
-            Shape::Sphere { center, radius, .. } => Some((*center, *radius)),
-            _ => None,
-        })
-        .collect()
-}
-
-fn close(a: Vec3, b: Vec3) -> bool {
-    (a - b).length() < 1e-5
 }
 
 #[test]
@@ -165,9 +130,13 @@ fn the_torus_knot_from_a_binary_ply_renders_the_obj_image() {
 const MALFORMED: &[(&str, &str, &str)] = &[
     ("albedo-above-one", "albedo-above-one.pbrt:7:1", "not in [0, 1]"),
     ("attribute-closed-by-transform-end", "attribute-closed-by-transform-end.pbrt:8:1", "does not match"),
-    ("blackbody-light", "blackbody-light.pbrt:7:21", "blackbody"),
+    ("attribute-unknown-target", "attribute-unknown-target.pbrt:7:1", "is not shape, light"),
+    ("blackbody-reflectance", "blackbody-reflectance.pbrt:6:18", "read only where a light's emission is"),
+    ("blackbody-three-numbers", "blackbody-three-numbers.pbrt:7:21", "[temperature scale]"),
     ("film-resolution-zero", "film-resolution-zero.pbrt:3:14", "not from 1"),
     ("include-cycle", "include-cycle.pbrt:7:1", "includes itself"),
+    ("include-then-parameters", "include-then-parameters.pbrt:7:3", "not > 0"),
+    ("include-with-a-bad-parameter", "included/negative-radius.pbrt:2:16", "not > 0"),
     ("index-out-of-range", "index-out-of-range.pbrt:7:22", "not one of the 3 points"),
     ("indices-not-triples", "indices-not-triples.pbrt:7:22", "not a multiple of 3"),
     ("infinite-in-parameter", "infinite-in-parameter.pbrt:7:16", "finite"),

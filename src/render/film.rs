@@ -3,11 +3,13 @@
 //! content hash), the seed, the settings and the resolved base radii, so that films of one
 //! render made in different runs or on different machines can be merged, and films of
 //! different renders cannot. Layers: the image and its direct, caustic and indirect parts
-//! (RGB each) and, with the diffusion estimate, the kernel field. Owns accumulation, merging
+//! (RGB each) and, with the diffusion estimate, the kernel field; the RGB layers resolve through
+//! the scene's image response (pbrt's film scale and white balance). Owns accumulation, merging
 //! and resolving to images; must not shade, trace or touch files (that is [`super::film_file`]).
 
 use super::pass::{BaseRadii, RenderSettings};
 use crate::image_io::Image;
+use crate::scene::ImageResponse;
 use glam::Vec3;
 use std::fmt;
 
@@ -35,6 +37,10 @@ pub struct FilmHeader {
     pub radii: BaseRadii,
     /// Whether the film carries the kernel-field channels.
     pub kernel_field: bool,
+    /// What the written image's pixels are multiplied by (the scene's film settings); left
+    /// out of the file when it is the identity, so such films keep their bytes.
+    #[serde(default, skip_serializing_if = "ImageResponse::is_identity")]
+    pub response: ImageResponse,
 }
 
 impl FilmHeader {
@@ -52,6 +58,8 @@ impl FilmHeader {
             Some("radii")
         } else if self.kernel_field != other.kernel_field {
             Some("kernel field")
+        } else if self.response != other.response {
+            Some("image response (film scale, exposure or white balance)")
         } else {
             None
         }
@@ -308,36 +316,35 @@ impl Film {
         Ok(())
     }
 
-    /// The mean of channels `first..first + 3` over the passes held.
-    fn mean_rgb(&self, first: usize) -> Image {
+    /// The mean of channels `first..first + 3` over the passes held, through `response`.
+    fn mean_rgb(&self, first: usize, response: &ImageResponse) -> Image {
         let (w, c) = (self.header.width, self.header.channels());
         let inv = 1.0 / self.passes.count().max(1) as f64;
+        let identity = response.is_identity();
         Image::from_fn(w, self.header.height, |x, y| {
             let s = &self.sums[(y * w + x) * c + first..];
-            Vec3::new(
-                (s[0] * inv) as f32,
-                (s[1] * inv) as f32,
-                (s[2] * inv) as f32,
-            )
+            let mean = [s[0] * inv, s[1] * inv, s[2] * inv];
+            let [r, g, b] = if identity { mean } else { response.apply(mean) };
+            Vec3::new(r as f32, g as f32, b as f32)
         })
     }
 
-    /// The image: the mean of the passes.
+    /// The image: the mean of the passes, through the scene's image response.
     pub fn image(&self) -> Image {
-        self.mean_rgb(0)
+        self.mean_rgb(0, &self.header.response)
     }
 
-    /// RGB layer `name` of [`RGB_LAYERS`].
+    /// RGB layer `name` of [`RGB_LAYERS`], through the scene's image response.
     pub fn layer(&self, name: &str) -> Option<Image> {
         let i = RGB_LAYERS.iter().position(|l| *l == name)?;
-        Some(self.mean_rgb(3 * i))
+        Some(self.mean_rgb(3 * i, &self.header.response))
     }
 
     /// The kernel field's mean channels (λ2, edge cos 2θ, edge sin 2θ), when the film has them.
     pub fn kernel_channels(&self) -> Option<Image> {
         self.header
             .kernel_field
-            .then(|| self.mean_rgb(3 * RGB_LAYERS.len()))
+            .then(|| self.mean_rgb(3 * RGB_LAYERS.len(), &ImageResponse::default()))
     }
 
     /// The kernel field as a picture (hue: edge direction, brightness: 1 − λ2), when present.

@@ -113,6 +113,7 @@ impl Wiring {
             settings: self.settings.clone(),
             radii,
             kernel_field: self.kernel_field,
+            response: world.description.response,
         }
     }
 

@@ -37,6 +37,43 @@ pub struct SceneDescription {
     /// Scene materials in name order, then materials taken from MTL files in order of first use.
     pub materials: Vec<Material>,
     pub shapes: Vec<Shape>,
+    /// What the written image's pixels are multiplied by (pbrt's film settings; the TOML
+    /// format leaves every image as rendered).
+    pub response: ImageResponse,
+}
+
+/// A linear map from the rendered radiance to the written pixel values: a white balance (a
+/// 3×3 matrix on linear sRGB, rows first) and then a scale. The default, the identity, leaves
+/// images byte for byte as rendered.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImageResponse {
+    pub scale: f64,
+    pub white_balance: Option<[[f64; 3]; 3]>,
+}
+
+impl Default for ImageResponse {
+    fn default() -> Self {
+        ImageResponse {
+            scale: 1.0,
+            white_balance: None,
+        }
+    }
+}
+
+impl ImageResponse {
+    pub fn is_identity(&self) -> bool {
+        *self == ImageResponse::default()
+    }
+
+    /// The written value of rendered linear sRGB `rgb`.
+    pub fn apply(&self, rgb: [f64; 3]) -> [f64; 3] {
+        let balanced = match &self.white_balance {
+            None => rgb,
+            Some(m) => m.map(|row| row[0] * rgb[0] + row[1] * rgb[1] + row[2] * rgb[2]),
+        };
+        balanced.map(|v| v * self.scale)
+    }
 }
 
 /// A pinhole camera. `up` is not parallel to `look_at - position`, which is not zero.
@@ -396,6 +433,7 @@ pub fn parse_with(
         lights,
         materials: materials.into_materials(),
         shapes,
+        response: ImageResponse::default(),
     };
     report
         .warnings

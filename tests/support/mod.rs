@@ -1,10 +1,12 @@
 //! Shared helpers of the render and photon-tracing tests: worlds from scene text, rayon pools,
 //! `dpm render` arguments, and small analytic pieces (ray–plane, Fresnel) written here
 //! independently of the crate so that the tests do not check the code with itself; `eye` holds
-//! the eye pass's closed-form scenes and the plane-render check, `photons` photon tracing's.
+//! the eye pass's closed-form scenes and the plane-render check, `photons` photon tracing's,
+//! `pbrt` the pbrt tests' scene text.
 #![allow(dead_code)]
 
 pub mod eye;
+pub mod pbrt;
 pub mod photons;
 
 use clap::Parser;

@@ -1,7 +1,8 @@
 //! A directive's arguments: the tokens after its name, read as strings, words, numbers (bare
-//! or in brackets), matrices and `"type" params` items, each error placed at its token. Owns
-//! nothing but reading; the directive's meaning is [`super::parser`]'s.
+//! or in brackets), matrices and `"type" params` items, each error placed at its token (in
+//! its own file). Owns nothing but reading; the directive's meaning is [`super::parser`]'s.
 
+use super::cursor::Cursor;
 use super::lexer::{Token, TokenKind};
 use super::params::{ParamError, ParamList, show};
 use super::parser::Item;
@@ -10,8 +11,7 @@ use glam::Mat4;
 
 /// A directive's arguments: the tokens after its name.
 pub(super) struct Args<'a> {
-    pub tokens: &'a [Token],
-    pub at: &'a mut usize,
+    pub tokens: &'a mut Cursor,
     pub place: &'a Place,
     pub directive: &'a str,
 }
@@ -19,7 +19,7 @@ pub(super) struct Args<'a> {
 impl Args<'_> {
     pub(super) fn param_error(&self, e: ParamError) -> PbrtError {
         PbrtError {
-            file: self.place.file.clone(),
+            file: e.file,
             line: Some(e.line),
             column: Some(e.column),
             field: format!("{} {}", self.directive, e.field),
@@ -27,18 +27,21 @@ impl Args<'_> {
         }
     }
 
-    fn next(&mut self, what: &str) -> Result<&Token, PbrtError> {
-        let t = self.tokens.get(*self.at).ok_or_else(|| {
+    fn next(&mut self, what: &str) -> Result<Token, PbrtError> {
+        self.tokens.next().ok_or_else(|| {
             self.place
                 .error(self.directive, format!("the file ends before its {what}"))
-        })?;
-        *self.at += 1;
-        Ok(t)
+        })
+    }
+
+    /// A parameter list, read to the first token that cannot start a parameter.
+    pub(super) fn params(&mut self) -> Result<ParamList, PbrtError> {
+        ParamList::read(self.tokens).map_err(|e| self.param_error(e))
     }
 
     fn error_at(&self, t: &Token, message: String) -> PbrtError {
         PbrtError {
-            file: self.place.file.clone(),
+            file: t.file.to_path_buf(),
             line: Some(t.line),
             column: Some(t.column),
             field: self.directive.into(),
@@ -47,7 +50,7 @@ impl Args<'_> {
     }
 
     pub(super) fn string(&mut self, what: &str) -> Result<String, PbrtError> {
-        let t = self.next(what)?.clone();
+        let t = self.next(what)?;
         match &t.kind {
             TokenKind::Str(s) => Ok(s.clone()),
             other => Err(self.error_at(
@@ -61,7 +64,7 @@ impl Args<'_> {
     }
 
     pub(super) fn word(&mut self) -> Result<String, PbrtError> {
-        let t = self.next("argument")?.clone();
+        let t = self.next("argument")?;
         match &t.kind {
             TokenKind::Word(s) | TokenKind::Str(s) => Ok(s.clone()),
             other => Err(self.error_at(&t, format!("expected a word, found {}", show(other)))),
@@ -69,7 +72,7 @@ impl Args<'_> {
     }
 
     fn number(&mut self) -> Result<f32, PbrtError> {
-        let t = self.next("numbers")?.clone();
+        let t = self.next("numbers")?;
         match &t.kind {
             TokenKind::Number(n) => match n.parse::<f32>() {
                 Ok(x) if x.is_finite() => Ok(x),
@@ -81,21 +84,21 @@ impl Args<'_> {
 
     pub(super) fn numbers<const N: usize>(&mut self) -> Result<[f32; N], PbrtError> {
         let bracketed = matches!(
-            self.tokens.get(*self.at),
+            self.tokens.peek(),
             Some(Token {
                 kind: TokenKind::Open,
                 ..
             })
         );
         if bracketed {
-            *self.at += 1;
+            self.tokens.next();
         }
         let mut v = [0.0; N];
         for x in &mut v {
             *x = self.number()?;
         }
         if bracketed {
-            let t = self.next("closing `]`")?.clone();
+            let t = self.next("closing `]`")?;
             if t.kind != TokenKind::Close {
                 return Err(self.error_at(
                     &t,
@@ -118,8 +121,8 @@ impl Args<'_> {
     /// `"type"` then a parameter list.
     pub(super) fn item(&mut self) -> Result<Item, PbrtError> {
         let kind = self.string("type")?;
-        let params = ParamList::read(self.tokens, self.at).map_err(|e| self.param_error(e))?;
-        if let Some(t) = self.tokens.get(*self.at)
+        let params = self.params()?;
+        if let Some(t) = self.tokens.peek()
             && matches!(
                 t.kind,
                 TokenKind::Str(_) | TokenKind::Number(_) | TokenKind::Open

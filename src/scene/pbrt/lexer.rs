@@ -1,7 +1,10 @@
 //! pbrt's tokens: quoted strings, numbers, `[` `]`, bare words (directives and `true`/`false`),
-//! with `#` comments skipped. Every token carries its 1-based line and column (in characters)
-//! so the parser's errors can name them. Owns nothing but the text of one file; must not know
-//! directives or parameter types.
+//! with `#` comments skipped. Every token carries its file and its 1-based line and column (in
+//! characters) so the parser's errors can name them wherever `Include` splices it. Owns
+//! nothing but the text of one file; must not know directives or parameter types.
+
+use std::path::Path;
+use std::sync::Arc;
 
 /// What a token is.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,6 +22,8 @@ pub(super) enum TokenKind {
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct Token {
     pub kind: TokenKind,
+    /// The file the token was read from.
+    pub file: Arc<Path>,
     pub line: usize,
     pub column: usize,
 }
@@ -31,8 +36,8 @@ pub(super) struct LexError {
     pub message: String,
 }
 
-/// Splits `text` into tokens.
-pub(super) fn tokens(text: &str) -> Result<Vec<Token>, LexError> {
+/// Splits `text`, the contents of `file`, into tokens.
+pub(super) fn tokens(text: &str, file: &Arc<Path>) -> Result<Vec<Token>, LexError> {
     let mut out = Vec::new();
     let mut chars = text.chars().peekable();
     let (mut line, mut column) = (1usize, 1usize);
@@ -127,6 +132,7 @@ pub(super) fn tokens(text: &str) -> Result<Vec<Token>, LexError> {
         };
         out.push(Token {
             kind,
+            file: file.clone(),
             line: start_line,
             column: start_column,
         });
@@ -134,12 +140,22 @@ pub(super) fn tokens(text: &str) -> Result<Vec<Token>, LexError> {
     Ok(out)
 }
 
+/// Tokens of `text` as if read from a file named `test.pbrt`, for tests.
+#[cfg(test)]
+pub(super) fn test_tokens(text: &str) -> Result<Vec<Token>, LexError> {
+    tokens(text, &Arc::from(Path::new("test.pbrt")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn kinds(text: &str) -> Vec<TokenKind> {
-        tokens(text).unwrap().into_iter().map(|t| t.kind).collect()
+        test_tokens(text)
+            .unwrap()
+            .into_iter()
+            .map(|t| t.kind)
+            .collect()
     }
 
     #[test]
@@ -160,16 +176,16 @@ mod tests {
 
     #[test]
     fn positions_are_one_based_lines_and_columns() {
-        let t = tokens("  Translate 1 -2 .5\n\t\"x\"").unwrap();
+        let t = test_tokens("  Translate 1 -2 .5\n\t\"x\"").unwrap();
         let at: Vec<_> = t.iter().map(|t| (t.line, t.column)).collect();
         assert_eq!(at, vec![(1, 3), (1, 13), (1, 15), (1, 18), (2, 2)]);
     }
 
     #[test]
     fn an_unterminated_string_names_where_it_starts() {
-        let err = tokens("Shape \"trianglemesh\n\"x\"").unwrap_err();
+        let err = test_tokens("Shape \"trianglemesh\n\"x\"").unwrap_err();
         assert_eq!((err.line, err.column), (1, 7));
-        let err = tokens("Shape \"abc").unwrap_err();
+        let err = test_tokens("Shape \"abc").unwrap_err();
         assert_eq!((err.line, err.column), (1, 7));
     }
 

@@ -2,11 +2,12 @@
 //! format gives: the part of the format that photon mapping with dpm's materials can
 //! represent is mapped (docs/scene-format.md, "pbrt scenes", lists what is read, mapped with a
 //! warning, and refused), the rest is refused with an error naming file, line and column.
-//! Owns pbrt's language (`lexer`, `params`, `args`, `parser`) and its mapping onto dpm's types
+//! Owns pbrt's language (`lexer`, `cursor`, `params`, `args`, `parser`) and its mapping onto dpm's types
 //! (`mapping`); must not call Embree, and leaves the checks every scene gets to the
 //! [`super`] module's validation.
 
 mod args;
+mod cursor;
 mod lexer;
 mod mapping;
 mod params;
@@ -20,7 +21,7 @@ use std::path::{Path, PathBuf};
 type PbrtError = SceneError;
 
 /// Which pbrt wrote the file, where the versions read a parameter differently (the spot
-/// light's falloff curve).
+/// light's falloff curve, a blackbody's normalisation, the film's exposure and white balance).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Dialect {
     V3,

@@ -1,11 +1,16 @@
 //! pbrt parameter lists: `"type name" value` or `"type name" [values]`, with every type the
 //! format has. Owns reading a list and typed access to it; each access marks the parameter as
-//! used, so what the mapping never read can be reported as ignored. Must not know what a
-//! directive means.
+//! used, so what the mapping never read can be reported as ignored. A parameter given twice
+//! keeps its last value, as pbrt-v3's parameter sets do. Must not know what a directive means.
 
+use super::Dialect;
+use super::cursor::Cursor;
 use super::lexer::{Token, TokenKind};
+use crate::spectrum;
 use glam::Vec3;
 use std::cell::Cell;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A parameter's value as written.
 #[derive(Clone, Debug, PartialEq)]
@@ -15,11 +20,14 @@ pub(super) enum Value {
     Bool(bool),
 }
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(super) struct Param {
     pub ty: String,
     pub name: String,
     pub values: Vec<Value>,
+    /// Where the parameter was written: its own file, which after an `Include` need not be
+    /// its directive's.
+    pub file: Arc<Path>,
     pub line: usize,
     pub column: usize,
     used: Cell<bool>,
@@ -28,6 +36,7 @@ pub(super) struct Param {
 /// Where in the file a problem is, and what.
 #[derive(Debug, PartialEq)]
 pub(super) struct ParamError {
+    pub file: PathBuf,
     pub line: usize,
     pub column: usize,
     /// `"type name"` as written.
@@ -38,6 +47,8 @@ pub(super) struct ParamError {
 #[derive(Debug, Default)]
 pub(super) struct ParamList {
     pub params: Vec<Param>,
+    /// One warning per parameter a later one of the same name and kind replaced.
+    pub replaced: Vec<String>,
 }
 
 const KNOWN_TYPES: &[&str] = &[
@@ -63,6 +74,7 @@ const KNOWN_TYPES: &[&str] = &[
 impl Param {
     fn error(&self, message: impl Into<String>) -> ParamError {
         ParamError {
+            file: self.file.to_path_buf(),
             line: self.line,
             column: self.column,
             field: format!("\"{} {}\"", self.ty, self.name),
@@ -106,14 +118,13 @@ fn describe(v: &Value) -> String {
 }
 
 impl ParamList {
-    /// Reads parameters from `tokens[*at..]` until the next token that cannot start one.
-    pub fn read(tokens: &[Token], at: &mut usize) -> Result<ParamList, ParamError> {
+    /// Reads parameters from `tokens` until the next token that cannot start one.
+    pub fn read(tokens: &mut Cursor) -> Result<ParamList, ParamError> {
         let mut list = ParamList::default();
         while let Some(Token {
             kind: TokenKind::Str(decl),
-            line,
-            column,
-        }) = tokens.get(*at)
+            ..
+        }) = tokens.peek()
         {
             let mut words = decl.split_whitespace();
             let (Some(ty), Some(name), None) = (words.next(), words.next(), words.next()) else {
@@ -121,65 +132,104 @@ impl ParamList {
                 // caller reports it as a stray token.
                 break;
             };
-            let error = |message: String| ParamError {
-                line: *line,
-                column: *column,
-                field: format!("\"{decl}\""),
+            let (ty, name) = (ty.to_string(), name.to_string());
+            let start = tokens.next().expect("peeked");
+            let decl = format!("\"{ty} {name}\"");
+            let error_at = |t: &Token, message: String| ParamError {
+                file: t.file.to_path_buf(),
+                line: t.line,
+                column: t.column,
+                field: decl.clone(),
                 message,
             };
-            if !KNOWN_TYPES.contains(&ty) {
-                return Err(error(format!("`{ty}` is not a pbrt parameter type")));
+            if !KNOWN_TYPES.contains(&ty.as_str()) {
+                return Err(error_at(
+                    &start,
+                    format!("`{ty}` is not a pbrt parameter type"),
+                ));
             }
-            if list.params.iter().any(|p| p.name == name) {
-                return Err(error(format!("parameter `{name}` is given twice")));
-            }
-            *at += 1;
             let mut values = Vec::new();
-            match tokens.get(*at).map(|t| &t.kind) {
-                Some(TokenKind::Open) => {
-                    *at += 1;
-                    loop {
-                        let Some(t) = tokens.get(*at) else {
-                            return Err(error("the value list `[` is never closed".into()));
-                        };
-                        *at += 1;
-                        match &t.kind {
-                            TokenKind::Close => break,
-                            kind => values.push(value(kind).ok_or_else(|| ParamError {
-                                line: t.line,
-                                column: t.column,
-                                field: format!("\"{decl}\""),
-                                message: format!("unexpected {} in a value list", show(kind)),
-                            })?),
-                        }
+            match tokens.next() {
+                Some(Token {
+                    kind: TokenKind::Open,
+                    ..
+                }) => loop {
+                    let Some(t) = tokens.next() else {
+                        return Err(error_at(
+                            &start,
+                            "the value list `[` is never closed".into(),
+                        ));
+                    };
+                    match &t.kind {
+                        TokenKind::Close => break,
+                        kind => values.push(value(kind).ok_or_else(|| {
+                            error_at(&t, format!("unexpected {} in a value list", show(kind)))
+                        })?),
                     }
-                }
-                Some(kind) => match value(kind) {
-                    Some(v) => {
-                        values.push(v);
-                        *at += 1;
-                    }
-                    None => return Err(error("has no value".into())),
                 },
-                None => return Err(error("has no value".into())),
+                Some(t) => match value(&t.kind) {
+                    Some(v) => values.push(v),
+                    None => return Err(error_at(&start, "has no value".into())),
+                },
+                None => return Err(error_at(&start, "has no value".into())),
             }
             if values.is_empty() {
-                return Err(error("has an empty value list".into()));
+                return Err(error_at(&start, "has an empty value list".into()));
             }
-            list.params.push(Param {
-                ty: ty.into(),
-                name: name.into(),
+            let param = Param {
+                ty,
+                name,
                 values,
-                line: *line,
-                column: *column,
+                file: start.file.clone(),
+                line: start.line,
+                column: start.column,
                 used: Cell::new(false),
-            });
+            };
+            list.add(param);
         }
         Ok(list)
     }
 
+    /// Adds `param`, replacing (with a warning) an earlier one of the same name and kind.
+    fn add(&mut self, param: Param) {
+        let same = |p: &Param| p.name == param.name && family(&p.ty) == family(&param.ty);
+        if let Some(i) = self.params.iter().position(same) {
+            let old = self.params.remove(i);
+            self.replaced.push(format!(
+                "{}:{}:{}: parameter \"{} {}\" is given again at {}:{}:{}; the last value is used",
+                old.file.display(),
+                old.line,
+                old.column,
+                old.ty,
+                old.name,
+                param.file.display(),
+                param.line,
+                param.column
+            ));
+        }
+        self.params.push(param);
+    }
+
+    /// Adds each of `defaults` whose name this list does not give (pbrt-v4's `Attribute`).
+    pub fn add_defaults(&mut self, defaults: &[Param]) {
+        for d in defaults {
+            if !self.params.iter().any(|p| p.name == d.name) {
+                self.params.push(d.clone());
+            }
+        }
+    }
+
+    /// Parameter `name`: a texture first, as pbrt looks textures up first, else the last one.
+    fn lookup(&self, name: &str) -> Option<&Param> {
+        let named = || self.params.iter().filter(|p| p.name == name);
+        named()
+            .find(|p| p.ty == "texture")
+            .or_else(|| named().last())
+    }
+
+    /// [`Self::lookup`], marking the parameter as read.
     fn find(&self, name: &str) -> Option<&Param> {
-        let p = self.params.iter().find(|p| p.name == name)?;
+        let p = self.lookup(name)?;
         p.used.set(true);
         Some(p)
     }
@@ -300,15 +350,54 @@ impl ParamList {
                 }
             }
             _ => Err(p.error(
-                "blackbody emission is not supported: give an rgb value (pbrt's manual lists \
-                 the RGB of common colour temperatures)",
+                "a blackbody is read only where a light's emission is: give an rgb value here",
             )),
+        }
+    }
+
+    /// A light's emission: [`Self::colour`], or a `blackbody` through Planck's law and the CIE
+    /// 1931 observer to linear sRGB. pbrt-v3 writes `[T scale]` and normalises the spectrum to
+    /// 1 at its peak; pbrt-v4 writes `T`, and its lights divide the spectrum by its
+    /// luminance, so a pbrt-v4 blackbody has luminance 1 (an `rgb` keeps its magnitude).
+    pub fn emission(&self, name: &str, dialect: Dialect) -> Result<Option<Vec3>, ParamError> {
+        match self.lookup(name) {
+            Some(p) if p.ty == "blackbody" => {
+                p.used.set(true);
+                let xs = p.numbers()?;
+                let (kelvin, scale) = match (dialect, &xs[..]) {
+                    (Dialect::V3, [t]) => (*t, 1.0),
+                    (Dialect::V3, [t, s]) => (*t, *s),
+                    (Dialect::V3, _) => {
+                        return Err(p.error(format!(
+                            "has {} numbers; a light's pbrt-v3 blackbody is [temperature scale]",
+                            xs.len()
+                        )));
+                    }
+                    (Dialect::V4, [t]) => (*t, 1.0),
+                    (Dialect::V4, _) => {
+                        return Err(p.error(format!(
+                            "has {} numbers; a pbrt-v4 blackbody is one temperature",
+                            xs.len()
+                        )));
+                    }
+                };
+                if kelvin <= 0.0 {
+                    return Err(p.error(format!("{kelvin} K is not a positive temperature")));
+                }
+                let xyz = spectrum::blackbody_xyz(kelvin as f64);
+                let xyz = match dialect {
+                    Dialect::V3 => xyz,
+                    Dialect::V4 => xyz / xyz.y,
+                };
+                Ok(Some(spectrum::xyz_to_linear_srgb(xyz).as_vec3() * scale))
+            }
+            _ => self.colour(name),
         }
     }
 
     /// The named spectrum a `spectrum` parameter gives as a string, if it is one.
     pub fn spectrum_name(&self, name: &str) -> Option<String> {
-        let p = self.params.iter().find(|p| p.name == name)?;
+        let p = self.lookup(name)?;
         match (&p.ty[..], &p.values[..]) {
             ("spectrum", [Value::Str(s)]) => {
                 p.used.set(true);
@@ -320,7 +409,7 @@ impl ParamList {
 
     /// Marks `name` as read on purpose without using its value.
     pub fn mark_used(&self, name: &str) {
-        if let Some(p) = self.params.iter().find(|p| p.name == name) {
+        if let Some(p) = self.lookup(name) {
             p.used.set(true);
         }
     }
@@ -336,13 +425,13 @@ impl ParamList {
 
     /// Location of parameter `name`, or `None`.
     pub fn at(&self, name: &str) -> Option<(usize, usize)> {
-        let p = self.params.iter().find(|p| p.name == name)?;
+        let p = self.lookup(name)?;
         Some((p.line, p.column))
     }
 
     /// An error placed at parameter `name`.
     pub fn error_at(&self, name: &str, message: impl Into<String>) -> Option<ParamError> {
-        let p = self.params.iter().find(|p| p.name == name)?;
+        let p = self.lookup(name)?;
         Some(p.error(message))
     }
 
@@ -368,6 +457,18 @@ impl ParamList {
     }
 }
 
+/// The kind a parameter type belongs to: pbrt keeps one value of each name and kind (its
+/// spectra are `rgb`, `color`, `spectrum` and `blackbody` alike).
+fn family(ty: &str) -> &str {
+    match ty {
+        "point" | "point3" => "point3",
+        "vector" | "vector3" => "vector3",
+        "normal" | "normal3" => "normal3",
+        "rgb" | "color" | "spectrum" | "blackbody" => "spectrum",
+        other => other,
+    }
+}
+
 fn value(kind: &TokenKind) -> Option<Value> {
     match kind {
         TokenKind::Number(n) => Some(Value::Number(n.clone())),
@@ -390,14 +491,13 @@ pub(super) fn show(kind: &TokenKind) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::lexer::tokens;
+    use super::super::lexer::test_tokens;
     use super::*;
 
     fn list(text: &str) -> Result<ParamList, ParamError> {
-        let t = tokens(text).unwrap();
-        let mut at = 0;
-        let list = ParamList::read(&t, &mut at)?;
-        assert_eq!(at, t.len(), "every token read");
+        let mut cursor = Cursor::new(test_tokens(text).unwrap(), "test.pbrt".into());
+        let list = ParamList::read(&mut cursor)?;
+        assert!(cursor.peek().is_none(), "every token read");
         Ok(list)
     }
 
@@ -439,7 +539,6 @@ mod tests {
             (r#""float radius""#, "no value"),
             (r#""float radius" []"#, "empty"),
             (r#""float3 radius" 1"#, "not a pbrt parameter type"),
-            (r#""float r" 1 "float r" 2"#, "twice"),
             (r#""float r" [1 Shape]"#, "unexpected"),
         ] {
             let e = list(text).unwrap_err();

@@ -2,21 +2,26 @@
 //! attribute and transform stacks, named coordinate systems, the current and named materials,
 //! the current area light and `ReverseOrientation`. The result is a [`Parsed`] list of
 //! cameras, lights, shapes and material definitions, each with its transform and place in the
-//! files, for [`super::mapping`] to turn into dpm's types. Owns the language and `Include`;
-//! must not decide what dpm can render.
+//! files, for [`super::mapping`] to turn into dpm's types. Owns the directives that record
+//! scene objects (the graphics state's are [`graphics_state`]'s, files' [`include`]'s); must
+//! not decide what dpm can render.
+
+mod graphics_state;
+mod include;
 
 use super::args::Args;
-use super::lexer::{Token, TokenKind, tokens};
+use super::cursor::Cursor;
+use super::lexer::{Token, TokenKind};
 use super::params::{ParamList, show};
 use super::{Dialect, PbrtError, Place};
 use crate::scene::files::SceneFiles;
-use crate::scene::transform::rotation;
-use glam::{Mat4, Vec3};
+use glam::Mat4;
+use graphics_state::{AttributeTarget, GraphicsState, Pushed};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// Deeper `Include` nesting than this is taken for a cycle nobody meant.
-const MAX_INCLUDE_DEPTH: usize = 32;
+/// How many ignored media directives the one warning about them names.
+const MEDIA_NAMED: usize = 4;
 
 /// A directive with a type and parameters, where it was written.
 #[derive(Debug)]
@@ -86,19 +91,6 @@ impl DialectEvidence {
     }
 }
 
-#[derive(Clone, Debug)]
-struct GraphicsState {
-    ctm: Mat4,
-    reverse_orientation: bool,
-    material: Option<usize>,
-    area_light: Option<usize>,
-}
-
-enum Pushed {
-    Attributes(GraphicsState, Place),
-    Transform(Mat4, Place),
-}
-
 pub(super) struct Parser<'f> {
     files: &'f dyn SceneFiles,
     out: Parsed,
@@ -110,7 +102,10 @@ pub(super) struct Parser<'f> {
     /// After `ActiveTransform EndTime`, transform directives change nothing (no motion blur).
     ignore_transforms: bool,
     search_folder: PathBuf,
-    include_stack: Vec<PathBuf>,
+    /// The files open around the `Import`s being read, for cycle checks.
+    importing: Vec<PathBuf>,
+    /// The media directives read and ignored, named in one warning at the end.
+    media: Vec<String>,
 }
 
 /// Reads `path` and everything it includes from `files`.
@@ -118,21 +113,19 @@ pub(super) fn parse(path: &Path, files: &dyn SceneFiles) -> Result<Parsed, PbrtE
     let mut parser = Parser {
         files,
         out: Parsed::default(),
-        state: GraphicsState {
-            ctm: Mat4::IDENTITY,
-            reverse_orientation: false,
-            material: None,
-            area_light: None,
-        },
+        state: GraphicsState::default(),
         stack: Vec::new(),
         named_frames: HashMap::new(),
         named_materials: HashMap::new(),
         in_world: false,
         ignore_transforms: false,
         search_folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
-        include_stack: Vec::new(),
+        importing: Vec::new(),
+        media: Vec::new(),
     };
-    parser.file(path, None)?;
+    let (tokens, identity) = parser.open_file(path, None, None)?;
+    parser.run(&mut Cursor::new(tokens, identity))?;
+    parser.warn_about_media();
     if let Some(Pushed::Attributes(_, at) | Pushed::Transform(_, at)) = parser.stack.last() {
         return Err(at.error("AttributeBegin", "is never closed (no AttributeEnd)"));
     }
@@ -150,186 +143,52 @@ pub(super) fn parse(path: &Path, files: &dyn SceneFiles) -> Result<Parsed, PbrtE
 }
 
 impl Parser<'_> {
-    /// Resolves a path named in the files: relative to the main file's folder, as pbrt does.
-    pub(super) fn resolve(folder: &Path, name: &str) -> PathBuf {
-        let p = Path::new(name);
-        if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            folder.join(p)
-        }
-    }
-
-    fn file(&mut self, path: &Path, included_at: Option<&Place>) -> Result<(), PbrtError> {
-        let refuse = |message: String| match included_at {
-            Some(at) => at.error("Include", message),
-            None => PbrtError {
-                file: path.to_path_buf(),
-                line: None,
-                column: None,
-                field: "scene".into(),
-                message,
-            },
-        };
-        if self.include_stack.len() >= MAX_INCLUDE_DEPTH {
-            return Err(refuse(format!(
-                "includes nest deeper than {MAX_INCLUDE_DEPTH} files (a cycle?)"
-            )));
-        }
-        let canonical = self.files.identity(path);
-        if self.include_stack.contains(&canonical) {
-            return Err(refuse(format!("`{}` includes itself", path.display())));
-        }
-        let bytes = (self.files.read(path))
-            .map_err(|err| refuse(format!("cannot read `{}`: {err}", path.display())))?;
-        let text = String::from_utf8(bytes)
-            .map_err(|_| refuse(format!("`{}` is not UTF-8 text", path.display())))?;
-        let file = self.out.files.len();
-        self.out.files.push(path.to_path_buf());
-        let tokens = tokens(&text).map_err(|e| PbrtError {
-            file: path.to_path_buf(),
-            line: Some(e.line),
-            column: Some(e.column),
-            field: "syntax".into(),
-            message: e.message,
-        })?;
-        self.include_stack.push(canonical);
-        let result = self.directives(file, &tokens);
-        self.include_stack.pop();
-        result
-    }
-
-    fn place(&self, file: usize, t: &Token) -> Place {
-        Place {
-            file: self.out.files[file].clone(),
-            line: t.line,
-            column: t.column,
-        }
-    }
-
-    fn directives(&mut self, file: usize, tokens: &[Token]) -> Result<(), PbrtError> {
-        let mut at = 0;
-        while let Some(t) = tokens.get(at) {
-            let place = self.place(file, t);
+    /// Reads directives from `tokens` to their end.
+    fn run(&mut self, tokens: &mut Cursor) -> Result<(), PbrtError> {
+        while let Some(t) = tokens.next() {
+            let place = place_of(&t);
             let TokenKind::Word(directive) = &t.kind else {
                 return Err(place.error(
                     "syntax",
                     format!("expected a directive, found {}", show(&t.kind)),
                 ));
             };
-            at += 1;
             let mut args = Args {
                 tokens,
-                at: &mut at,
                 place: &place,
                 directive,
             };
-            self.directive(directive, &mut args)?;
+            if !self.state_directive(directive, &mut args)? {
+                self.directive(directive, &mut args)?;
+            }
         }
         Ok(())
+    }
+
+    /// A parameter list; the warnings about parameters given twice join the parser's.
+    fn params(&mut self, args: &mut Args) -> Result<ParamList, PbrtError> {
+        let mut params = args.params()?;
+        self.out.warnings.append(&mut params.replaced);
+        Ok(params)
+    }
+
+    /// `"type" params`, with the `Attribute` defaults of `target` for what it does not give.
+    fn item(
+        &mut self,
+        args: &mut Args,
+        target: Option<AttributeTarget>,
+    ) -> Result<Item, PbrtError> {
+        let mut item = args.item()?;
+        self.out.warnings.append(&mut item.params.replaced);
+        if let Some(target) = target {
+            item.params.add_defaults(&self.state.defaults_for(target));
+        }
+        Ok(item)
     }
 
     fn directive(&mut self, directive: &str, args: &mut Args) -> Result<(), PbrtError> {
         let place = args.place.clone();
         match directive {
-            "Identity" => self.transform(Mat4::IDENTITY, true),
-            "Translate" => {
-                let [x, y, z] = args.numbers::<3>()?;
-                self.transform(Mat4::from_translation(Vec3::new(x, y, z)), false);
-            }
-            "Scale" => {
-                let [x, y, z] = args.numbers::<3>()?;
-                self.transform(Mat4::from_scale(Vec3::new(x, y, z)), false);
-            }
-            "Rotate" => {
-                let [angle, x, y, z] = args.numbers::<4>()?;
-                let axis = Vec3::new(x, y, z);
-                if axis.length_squared() == 0.0 {
-                    return Err(place.error("Rotate", "the rotation axis is the zero vector"));
-                }
-                self.transform(Mat4::from_mat3(rotation(axis.normalize(), angle)), false);
-            }
-            "LookAt" => {
-                let v = args.numbers::<9>()?;
-                let eye = Vec3::new(v[0], v[1], v[2]);
-                let look = Vec3::new(v[3], v[4], v[5]);
-                let up = Vec3::new(v[6], v[7], v[8]);
-                self.transform(
-                    look_at(eye, look, up).map_err(|m| place.error("LookAt", m))?,
-                    false,
-                );
-            }
-            "Transform" | "ConcatTransform" => {
-                let m = args.matrix()?;
-                self.transform(m, directive == "Transform");
-            }
-            "CoordinateSystem" => {
-                let name = args.string("name")?;
-                self.named_frames.insert(name, self.state.ctm);
-            }
-            "CoordSysTransform" => {
-                let name = args.string("name")?;
-                match self.named_frames.get(&name) {
-                    Some(m) => self.state.ctm = *m,
-                    None => {
-                        return Err(place.error(
-                            "CoordSysTransform",
-                            format!("no coordinate system is named \"{name}\""),
-                        ));
-                    }
-                }
-            }
-            "TransformTimes" => {
-                args.numbers::<2>()?;
-            }
-            "ActiveTransform" => match args.word()?.as_str() {
-                "StartTime" | "All" => self.ignore_transforms = false,
-                "EndTime" => {
-                    self.ignore_transforms = true;
-                    self.out.warnings.push(format!(
-                        "{place}: ActiveTransform EndTime: motion blur is not supported; end-time transforms are ignored"
-                    ));
-                }
-                other => {
-                    return Err(place.error(
-                        "ActiveTransform",
-                        format!("`{other}` is not StartTime, EndTime or All"),
-                    ));
-                }
-            },
-            "ReverseOrientation" => self.state.reverse_orientation ^= true,
-            "AttributeBegin" => self
-                .stack
-                .push(Pushed::Attributes(self.state.clone(), place)),
-            "TransformBegin" => self.stack.push(Pushed::Transform(self.state.ctm, place)),
-            "AttributeEnd" | "TransformEnd" => {
-                let want_attributes = directive == "AttributeEnd";
-                match self.stack.pop() {
-                    Some(Pushed::Attributes(state, _)) if want_attributes => self.state = state,
-                    Some(Pushed::Transform(ctm, _)) if !want_attributes => self.state.ctm = ctm,
-                    Some(Pushed::Attributes(_, open) | Pushed::Transform(_, open)) => {
-                        return Err(place.error(
-                            directive,
-                            format!(
-                                "does not match the {} at {open}",
-                                if want_attributes {
-                                    "TransformBegin"
-                                } else {
-                                    "AttributeBegin"
-                                }
-                            ),
-                        ));
-                    }
-                    None => {
-                        let begin = if want_attributes {
-                            "AttributeBegin"
-                        } else {
-                            "TransformBegin"
-                        };
-                        return Err(place.error(directive, format!("has no {begin} to close")));
-                    }
-                }
-            }
             "WorldBegin" => {
                 if self.in_world {
                     return Err(place.error("WorldBegin", "appears twice"));
@@ -343,7 +202,7 @@ impl Parser<'_> {
             }
             "Camera" => {
                 self.before_world(&place, directive)?;
-                let item = args.item()?;
+                let item = self.item(args, None)?;
                 let camera_to_world = self.state.ctm.inverse();
                 if !camera_to_world.is_finite() {
                     return Err(place.error("Camera", "the current transform is not invertible"));
@@ -356,7 +215,7 @@ impl Parser<'_> {
             }
             "Film" => {
                 self.before_world(&place, directive)?;
-                let item = args.item()?;
+                let item = self.item(args, None)?;
                 if matches!(item.kind.as_str(), "rgb" | "gbuffer" | "spectral") {
                     self.v4(&place, &format!("Film \"{}\"", item.kind));
                 }
@@ -365,7 +224,7 @@ impl Parser<'_> {
             "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" | "SurfaceIntegrator"
             | "VolumeIntegrator" | "Renderer" => {
                 self.before_world(&place, directive)?;
-                let item = args.item()?;
+                let item = self.item(args, None)?;
                 self.out
                     .ignored
                     .push(format!("{place}: {directive} \"{}\"", item.kind));
@@ -382,8 +241,7 @@ impl Parser<'_> {
             }
             "Option" => {
                 self.v4(&place, "Option");
-                let item =
-                    ParamList::read(args.tokens, args.at).map_err(|e| args.param_error(e))?;
+                let item = self.params(args)?;
                 let names: Vec<_> = item.params.iter().map(|p| p.name.clone()).collect();
                 self.out
                     .ignored
@@ -391,7 +249,7 @@ impl Parser<'_> {
             }
             "Material" => {
                 self.in_world(&place, directive)?;
-                let item = args.item()?;
+                let item = self.item(args, Some(AttributeTarget::Material))?;
                 self.note_material_dialect(&place, &item.kind);
                 self.out.materials.push((None, item));
                 self.state.material = Some(self.out.materials.len() - 1);
@@ -399,8 +257,8 @@ impl Parser<'_> {
             "MakeNamedMaterial" => {
                 self.in_world(&place, directive)?;
                 let name = args.string("name")?;
-                let params =
-                    ParamList::read(args.tokens, args.at).map_err(|e| args.param_error(e))?;
+                let mut params = self.params(args)?;
+                params.add_defaults(&self.state.defaults_for(AttributeTarget::Material));
                 let kind = params
                     .string("type")
                     .map_err(|e| args.param_error(e))?
@@ -437,29 +295,31 @@ impl Parser<'_> {
                 let name = args.string("name")?;
                 let _ty = args.string("type")?;
                 let class = args.string("class")?;
-                ParamList::read(args.tokens, args.at).map_err(|e| args.param_error(e))?;
+                self.params(args)?;
                 self.out.ignored.push(format!("{place}: Texture \"{name}\" ({class}): textures are not supported; a material that uses it is refused"));
             }
             "MakeNamedMedium" => {
-                args.string("name")?;
-                ParamList::read(args.tokens, args.at).map_err(|e| args.param_error(e))?;
-                self.media_ignored(&place, directive);
+                let name = args.string("name")?;
+                self.params(args)?;
+                self.media_ignored(&place, &format!("MakeNamedMedium \"{name}\""));
             }
             "MediumInterface" => {
-                args.string("inside medium")?;
+                let mut names = vec![args.string("interior medium")?];
                 if let Some(Token {
                     kind: TokenKind::Str(s),
                     ..
-                }) = args.tokens.get(*args.at)
+                }) = args.tokens.peek()
                     && !s.contains(' ')
                 {
-                    *args.at += 1;
+                    names.push(s.clone());
+                    args.tokens.next();
                 }
-                self.media_ignored(&place, directive);
+                let names: Vec<_> = names.iter().map(|n| format!("\"{n}\"")).collect();
+                self.media_ignored(&place, &format!("MediumInterface {}", names.join(" ")));
             }
             "LightSource" => {
                 self.in_world(&place, directive)?;
-                let item = args.item()?;
+                let item = self.item(args, Some(AttributeTarget::Light))?;
                 self.out.lights.push(LightItem {
                     item,
                     ctm: self.state.ctm,
@@ -467,13 +327,13 @@ impl Parser<'_> {
             }
             "AreaLightSource" => {
                 self.in_world(&place, directive)?;
-                let item = args.item()?;
+                let item = self.item(args, Some(AttributeTarget::Light))?;
                 self.out.area_lights.push(item);
                 self.state.area_light = Some(self.out.area_lights.len() - 1);
             }
             "Shape" => {
                 self.in_world(&place, directive)?;
-                let item = args.item()?;
+                let item = self.item(args, Some(AttributeTarget::Shape))?;
                 if item.kind == "bilinearmesh" {
                     self.v4(&place, "Shape \"bilinearmesh\"");
                 }
@@ -485,40 +345,18 @@ impl Parser<'_> {
                     area_light: self.state.area_light,
                 });
             }
-            "Include" | "Import" => {
-                if directive == "Import" {
-                    self.v4(&place, "Import");
-                }
-                let name = args.string("file name")?;
-                let path = Self::resolve(&self.search_folder, &name);
-                // Import shares named things but not the graphics state.
-                let saved = (directive == "Import").then(|| self.state.clone());
-                self.file(&path, Some(&place))?;
-                if let Some(state) = saved {
-                    self.state = state;
-                }
-            }
+            "Include" | "Import" => self.include(directive, args)?,
             "ObjectBegin" | "ObjectEnd" | "ObjectInstance" => {
                 return Err(place.error(
                     directive,
                     "object instancing is not supported: flatten the instances into shapes",
                 ));
             }
-            "Attribute" => {
-                return Err(place.error("Attribute", "pbrt-v4's default-parameter `Attribute` is not supported: give the parameters on each directive"));
-            }
             other => {
                 return Err(place.error("syntax", format!("`{other}` is not a pbrt directive")));
             }
         }
         Ok(())
-    }
-
-    fn transform(&mut self, m: Mat4, replace: bool) {
-        if self.ignore_transforms {
-            return;
-        }
-        self.state.ctm = if replace { m } else { self.state.ctm * m };
     }
 
     fn before_world(&self, place: &Place, directive: &str) -> Result<(), PbrtError> {
@@ -535,9 +373,22 @@ impl Parser<'_> {
         Ok(())
     }
 
-    fn media_ignored(&mut self, place: &Place, directive: &str) {
+    fn media_ignored(&mut self, place: &Place, what: &str) {
+        self.media.push(format!("{what} ({place})"));
+    }
+
+    /// One warning for every media directive read: dpm has no participating media.
+    fn warn_about_media(&mut self) {
+        let Some(first) = self.media.first() else {
+            return;
+        };
+        let place = first[first.rfind('(').map_or(0, |i| i + 1)..].trim_end_matches(')');
+        let mut named = self.media[..self.media.len().min(MEDIA_NAMED)].join(", ");
+        if self.media.len() > MEDIA_NAMED {
+            named += &format!(" and {} more", self.media.len() - MEDIA_NAMED);
+        }
         self.out.warnings.push(format!(
-            "{place}: {directive}: participating media are not supported and are ignored"
+            "{place}: participating media are not supported; ignored: {named}"
         ));
     }
 
@@ -578,23 +429,11 @@ impl Parser<'_> {
     }
 }
 
-/// pbrt's LookAt: the world-to-camera transform of an eye at `eye` looking at `look`.
-fn look_at(eye: Vec3, look: Vec3, up: Vec3) -> Result<Mat4, String> {
-    let dir = (look - eye).normalize_or_zero();
-    if dir == Vec3::ZERO {
-        return Err("the eye and the look-at point are the same".into());
+/// Where token `t` was written.
+fn place_of(t: &Token) -> Place {
+    Place {
+        file: t.file.to_path_buf(),
+        line: t.line,
+        column: t.column,
     }
-    let right = up.normalize_or_zero().cross(dir);
-    if right.length() < 1e-9 {
-        return Err("the up vector is zero or parallel to the view direction".into());
-    }
-    let right = right.normalize();
-    let new_up = dir.cross(right);
-    let camera_to_world = Mat4::from_cols(
-        right.extend(0.0),
-        new_up.extend(0.0),
-        dir.extend(0.0),
-        eye.extend(1.0),
-    );
-    Ok(camera_to_world.inverse())
 }

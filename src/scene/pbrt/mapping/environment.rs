@@ -58,7 +58,7 @@ impl Mapper<'_> {
         image: &str,
         ctm: &Mat4,
     ) -> Result<Light, SceneError> {
-        let p = |e| param_error(&item.at, "LightSource", e);
+        let p = |e| param_error("LightSource", e);
         let Some(file) = item.params.string(image).map_err(p)? else {
             return Err(value_error(
                 item,

@@ -13,11 +13,14 @@ use glam::{Mat4, Vec3};
 use std::f32::consts::PI;
 
 impl Mapper<'_> {
-    /// `I` or `L` (default 1) times `scale` (an RGB in pbrt-v3, a float in pbrt-v4).
+    /// `I` or `L` (default 1; an rgb, a constant spectrum or a blackbody) times `scale` (a
+    /// spectrum in pbrt-v3, a float in pbrt-v4).
     pub(super) fn emission(&self, item: &Item, name: &str) -> Result<Vec3, SceneError> {
-        let p = |e| param_error(&item.at, "LightSource", e);
-        let value = item.params.colour(name).map_err(p)?.unwrap_or(Vec3::ONE);
-        let scale = item.params.colour("scale").map_err(p)?.unwrap_or(Vec3::ONE);
+        let p = |e| param_error("LightSource", e);
+        let dialect = self.dialect.0;
+        let value = item.params.emission(name, dialect).map_err(p)?;
+        let scale = item.params.emission("scale", dialect).map_err(p)?;
+        let (value, scale) = (value.unwrap_or(Vec3::ONE), scale.unwrap_or(Vec3::ONE));
         Ok(value * scale)
     }
 
@@ -25,11 +28,11 @@ impl Mapper<'_> {
     fn given_power(&self, item: &Item) -> Result<Option<f32>, SceneError> {
         item.params
             .float("power")
-            .map_err(|e| param_error(&item.at, "LightSource", e))
+            .map_err(|e| param_error("LightSource", e))
     }
 
     pub(super) fn light(&mut self, item: &Item, ctm: &Mat4) -> Result<Light, SceneError> {
-        let p = |e| param_error(&item.at, "LightSource", e);
+        let p = |e| param_error("LightSource", e);
         let point = |name: &str, default: Vec3| -> Result<Vec3, SceneError> {
             let v = item.params.vec3(name).map_err(p)?;
             Ok(ctm.transform_point3(v.map_or(default, |v| v)))
@@ -152,7 +155,7 @@ impl Mapper<'_> {
                 format!("\"{}\": dpm's area lights are diffuse emitters", area.kind),
             ));
         }
-        let p = |e| param_error(&area.at, "AreaLightSource", e);
+        let p = |e| param_error("AreaLightSource", e);
         if area.params.at("filename").is_some() {
             return Err(value_error(
                 area,

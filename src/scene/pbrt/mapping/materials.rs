@@ -42,7 +42,7 @@ impl Mapper<'_> {
         params: &ParamList,
         at: &Place,
     ) -> Result<Mapped, SceneError> {
-        let p = |e| param_error(at, "Material", e);
+        let p = |e| param_error("Material", e);
         let colour = |name: &str, default: f32| -> Result<Vec3, SceneError> {
             Ok(params
                 .colour(name)
@@ -210,7 +210,7 @@ impl Mapper<'_> {
     /// A smooth conductor's colour: `reflectance`, else F0 from constant η and k (pbrt-v4's
     /// default conductor is copper).
     fn conductor_reflectance(&self, params: &ParamList, at: &Place) -> Result<Vec3, SceneError> {
-        let p = |e| param_error(at, "Material", e);
+        let p = |e| param_error("Material", e);
         if let Some(r) = params.colour("reflectance").map_err(p)? {
             return Ok(r);
         }

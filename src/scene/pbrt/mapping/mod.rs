@@ -1,10 +1,12 @@
-//! What the parsed pbrt directives become in dpm: the camera (pbrt's `fov` is for the shorter
+//! What the parsed pbrt directives become in dpm: the film ([`film`]: resolution and what pbrt
+//! does to the written image), the camera (pbrt's `fov` is for the shorter
 //! image axis; its camera space is left-handed), the lights (pbrt gives intensity or radiance,
 //! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`]).
 //! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
 //! Owns the mapping; must not parse text.
 
 mod environment;
+mod film;
 mod lights;
 mod materials;
 mod shapes;
@@ -20,11 +22,6 @@ use glam::{Mat4, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// pbrt's default film size.
-const DEFAULT_RESOLUTION: [i64; 2] = [640, 480];
-/// A side longer than this is surely a typo, and its film would not fit in memory.
-const MAX_RESOLUTION: i64 = 1 << 16;
-
 pub(super) struct Mapper<'f> {
     files: &'f dyn SceneFiles,
     folder: PathBuf,
@@ -37,9 +34,11 @@ pub(super) struct Mapper<'f> {
     material_index: HashMap<usize, u32>,
 }
 
-pub(super) fn param_error(at: &Place, directive: &str, e: ParamError) -> SceneError {
+/// A parameter's error, placed where the parameter was written (after an `Include`, maybe
+/// not in its directive's file).
+pub(super) fn param_error(directive: &str, e: ParamError) -> SceneError {
     SceneError {
-        file: at.file.clone(),
+        file: e.file,
         line: Some(e.line),
         column: Some(e.column),
         field: format!("{directive} {}", e.field),
@@ -76,7 +75,8 @@ pub(super) fn scene(
             .iter()
             .map(|i| format!("{i}: ignored (dpm's own settings and flags apply)")),
     );
-    let camera = m.camera(parsed.camera.as_ref(), parsed.film.as_ref())?;
+    let (resolution, response) = m.film(parsed.film.as_ref(), parsed.camera.as_ref())?;
+    let camera = m.camera(parsed.camera.as_ref(), resolution)?;
     let mut lights = Vec::new();
     for light in &parsed.lights {
         lights.push(m.light(&light.item, &light.ctm)?);
@@ -117,6 +117,7 @@ pub(super) fn scene(
         lights,
         materials: m.materials,
         shapes,
+        response,
     };
     let mut report = m.report;
     report
@@ -149,34 +150,9 @@ impl Mapper<'_> {
     fn camera(
         &mut self,
         camera: Option<&CameraItem>,
-        film: Option<&Item>,
+        resolution: [u32; 2],
     ) -> Result<Camera, SceneError> {
-        let mut resolution = DEFAULT_RESOLUTION;
-        if let Some(film) = film {
-            let p = |e| param_error(&film.at, "Film", e);
-            for (axis, name) in ["xresolution", "yresolution"].into_iter().enumerate() {
-                if let Some(n) = film.params.integer(name).map_err(p)? {
-                    if !(1..=MAX_RESOLUTION).contains(&n) {
-                        return Err(film
-                            .params
-                            .error_at(name, format!("{n} is not from 1 to {MAX_RESOLUTION}"))
-                            .map(p)
-                            .expect("parameter exists"));
-                    }
-                    resolution[axis] = n;
-                }
-            }
-            film.params.string("filename").map_err(p)?;
-            if film.params.at("cropwindow").is_some() {
-                self.warn(
-                    &film.at,
-                    "Film \"cropwindow\" is ignored: dpm renders the whole frame".into(),
-                );
-                film.params.floats("cropwindow").map_err(p)?;
-            }
-            self.unused(film, "Film");
-        }
-        let (width, height) = (resolution[0] as u32, resolution[1] as u32);
+        let [width, height] = resolution;
         let (camera_to_world, fov) = match camera {
             None => (Mat4::IDENTITY, 90.0),
             Some(c) => {
@@ -190,7 +166,7 @@ impl Mapper<'_> {
                         ),
                     ));
                 }
-                let p = |e| param_error(at, "Camera", e);
+                let p = |e| param_error("Camera", e);
                 let fov = c.item.params.float("fov").map_err(p)?.unwrap_or(90.0);
                 if !(fov > 0.0 && fov < 180.0) {
                     return Err(c
@@ -303,7 +279,7 @@ pub(super) fn require<T>(
     directive: &str,
 ) -> Result<T, SceneError> {
     value
-        .map_err(|e| param_error(&item.at, directive, e))?
+        .map_err(|e| param_error(directive, e))?
         .ok_or_else(|| {
             item.at.error(
                 directive,
@@ -318,7 +294,7 @@ pub(super) fn require<T>(
 /// The parameter list of `item` and its place, for errors about a value.
 pub(super) fn value_error(item: &Item, directive: &str, name: &str, message: String) -> SceneError {
     match item.params.error_at(name, message.clone()) {
-        Some(e) => param_error(&item.at, directive, e),
+        Some(e) => param_error(directive, e),
         None => item.at.error(directive, message),
     }
 }

@@ -40,7 +40,7 @@ impl Mapper<'_> {
 
     pub(in super::super) fn geometry(&mut self, shape: &ShapeItem) -> Result<Geometry, SceneError> {
         let item = &shape.item;
-        let p = |e| param_error(&item.at, "Shape", e);
+        let p = |e| param_error("Shape", e);
         if let Some(alpha) = item.params.float("alpha").map_err(p)?
             && alpha != 1.0
         {
@@ -126,7 +126,7 @@ impl Mapper<'_> {
 
     fn sphere(&mut self, shape: &ShapeItem) -> Result<Geometry, SceneError> {
         let item = &shape.item;
-        let p = |e| param_error(&item.at, "Shape", e);
+        let p = |e| param_error("Shape", e);
         let radius = item.params.float("radius").map_err(p)?.unwrap_or(1.0);
         if radius.is_nan() || radius <= 0.0 {
             return Err(value_error(
