@@ -9,7 +9,8 @@
 //! paths, `format` holds the serde structs of the file format, `validate` checks them and builds
 //! the public types, `rules` holds the value rules the public types obey (shared by `validate`
 //! and by [`check_light`] and [`check_material`], for descriptions built in code), `mesh` reads
-//! OBJ/MTL files, `transform` places meshes in the world.
+//! OBJ/MTL files, `transform` places meshes in the world, `tessellate` turns curved and
+//! subdivision surfaces into triangles in their own space.
 
 mod document;
 pub mod environment;
@@ -19,6 +20,7 @@ mod mesh;
 mod pbrt;
 pub mod ply;
 mod rules;
+pub(crate) mod tessellate;
 pub(crate) mod transform;
 mod validate;
 

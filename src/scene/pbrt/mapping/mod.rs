@@ -1,7 +1,8 @@
 //! What the parsed pbrt directives become in dpm: the film ([`film`]: resolution and what pbrt
 //! does to the written image), the camera (pbrt's `fov` is for the shorter
 //! image axis; its camera space is left-handed), the lights (pbrt gives intensity or radiance,
-//! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`]).
+//! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`], the tessellated ones in
+//! [`tessellated`]).
 //! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
 //! Owns the mapping; must not parse text.
 
@@ -10,6 +11,7 @@ mod film;
 mod lights;
 mod materials;
 mod shapes;
+mod tessellated;
 
 use super::params::ParamError;
 use super::parser::{CameraItem, Item, Parsed};

@@ -1,10 +1,12 @@
 //! pbrt's shapes as dpm's: `trianglemesh`, `plymesh` (through [`crate::scene::ply`]) and
 //! planar `bilinearmesh` patches become world-space triangle meshes wound so that their
 //! geometric normal is pbrt's (the side a glass is entered from, an area light emits to);
-//! full `sphere`s become spheres. Partial spheres and the other quadrics, curves and
-//! subdivision surfaces are refused. Owns placing shapes; must not choose materials.
+//! full `sphere`s become spheres; the quadrics, partial spheres, `loopsubdiv` and
+//! `heightfield` are tessellated ([`super::tessellated`]) and placed here like a mesh.
+//! Curves and NURBS are refused. Owns placing shapes; must not choose materials.
 
 use super::super::parser::{Item, ShapeItem};
+use super::tessellated::SphereCut;
 use super::{Mapper, param_error, require, value_error};
 use crate::scene::{SceneError, Shape, TriangleMesh, ply, rules};
 use glam::{Mat3, Vec3};
@@ -115,10 +117,12 @@ impl Mapper<'_> {
                 }
                 self.mesh(shape, positions, normals, triangles)
             }
-            "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" | "curve" | "loopsubdiv"
-            | "nurbs" | "heightfield" => Err(item.at.error(
+            "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" => self.quadric(shape),
+            "loopsubdiv" => self.loop_subdivision(shape),
+            "heightfield" => self.heightfield(shape),
+            "curve" | "nurbs" => Err(item.at.error(
                 "Shape",
-                format!("shape \"{}\" is not supported: dpm renders triangle meshes and full spheres (convert it to a trianglemesh or plymesh)", item.kind),
+                format!("shape \"{}\" is not supported: dpm renders triangle meshes, spheres and the quadrics (convert it to a trianglemesh or plymesh)", item.kind),
             )),
             other => Err(item.at.error("Shape", format!("\"{other}\" is not a pbrt shape"))),
         }
@@ -127,24 +131,11 @@ impl Mapper<'_> {
     fn sphere(&mut self, shape: &ShapeItem) -> Result<Geometry, SceneError> {
         let item = &shape.item;
         let p = |e| param_error("Shape", e);
+        if let SphereCut::Partial(quadric) = self.sphere_cut(item)? {
+            return self.placed_quadric(shape, quadric);
+        }
+        // sphere_cut has checked it.
         let radius = item.params.float("radius").map_err(p)?.unwrap_or(1.0);
-        if radius.is_nan() || radius <= 0.0 {
-            return Err(value_error(
-                item,
-                "Shape",
-                "radius",
-                format!("radius {radius} is not > 0"),
-            ));
-        }
-        let zmin = item.params.float("zmin").map_err(p)?.unwrap_or(-radius);
-        let zmax = item.params.float("zmax").map_err(p)?.unwrap_or(radius);
-        let phimax = item.params.float("phimax").map_err(p)?.unwrap_or(360.0);
-        if zmin > -radius || zmax < radius || phimax < 360.0 {
-            return Err(item.at.error(
-                "Shape",
-                "a partial sphere (zmin, zmax or phimax cut) is not supported; only full spheres",
-            ));
-        }
         let m = Mat3::from_mat4(shape.ctm);
         let scales = [m.x_axis.length(), m.y_axis.length(), m.z_axis.length()];
         let mean = scales.iter().sum::<f32>() / 3.0;
@@ -166,7 +157,7 @@ impl Mapper<'_> {
     }
 
     /// Places a mesh in the world, wound as pbrt orients it, without zero-area triangles.
-    fn mesh(
+    pub(super) fn mesh(
         &mut self,
         shape: &ShapeItem,
         positions: Vec<Vec3>,
@@ -273,7 +264,7 @@ fn corner_indices(
         .collect()
 }
 
-fn corner_triples(
+pub(super) fn corner_triples(
     item: &Item,
     indices: &[i64],
     vertex_count: usize,
