@@ -22,11 +22,13 @@ pub(super) const NAME: &str = "Embree 3";
 
 pub(super) const TRIANGLE: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_TRIANGLE;
 pub(super) const SPHERE_POINT: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_SPHERE_POINT;
+pub(super) const INSTANCE: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_INSTANCE;
 pub(super) const VERTEX: b::RTCBufferType = b::RTC_BUFFER_TYPE_VERTEX;
 pub(super) const INDEX: b::RTCBufferType = b::RTC_BUFFER_TYPE_INDEX;
 pub(super) const FLOAT3: b::RTCFormat = b::RTC_FORMAT_FLOAT3;
 pub(super) const FLOAT4: b::RTCFormat = b::RTC_FORMAT_FLOAT4;
 pub(super) const UINT3: b::RTCFormat = b::RTC_FORMAT_UINT3;
+pub(super) const FLOAT3X4_COLUMN_MAJOR: b::RTCFormat = b::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;
 
 /// Embree's error codes as the shim hands them over (`int`), by name; `RTC_ERROR_NONE` is 0.
 pub(super) const ERROR_NONE: c_int = b::RTC_ERROR_NONE as c_int;

@@ -14,11 +14,13 @@ pub(super) const NAME: &str = "Embree 4";
 
 pub(super) const TRIANGLE: b::RTCGeometryType = b::RTCGeometryType::TRIANGLE;
 pub(super) const SPHERE_POINT: b::RTCGeometryType = b::RTCGeometryType::SPHERE_POINT;
+pub(super) const INSTANCE: b::RTCGeometryType = b::RTCGeometryType::INSTANCE;
 pub(super) const VERTEX: b::RTCBufferType = b::RTCBufferType::VERTEX;
 pub(super) const INDEX: b::RTCBufferType = b::RTCBufferType::INDEX;
 pub(super) const FLOAT3: b::RTCFormat = b::RTCFormat::FLOAT3;
 pub(super) const FLOAT4: b::RTCFormat = b::RTCFormat::FLOAT4;
 pub(super) const UINT3: b::RTCFormat = b::RTCFormat::UINT3;
+pub(super) const FLOAT3X4_COLUMN_MAJOR: b::RTCFormat = b::RTCFormat::FLOAT3X4_COLUMN_MAJOR;
 
 /// Embree's error codes as the shim hands them over (`int`), by name; `RTC_ERROR_NONE` is 0.
 pub(super) const ERROR_NONE: c_int = b::RTCError::NONE as c_int;

@@ -1,6 +1,7 @@
 //! The only door to Embree, and the only code in dpm that touches raw pointers: a thin safe
 //! wrapper that owns the device, error reporting, building an immutable scene from triangle
-//! meshes and spheres, single-ray closest-hit and occlusion queries, the Embree version in use,
+//! meshes, spheres and instances of other committed scenes (one level, as pbrt's object
+//! instancing allows), single-ray closest-hit and occlusion queries, the Embree version in use,
 //! and the rayon pools (flush-to-zero, a bounded thread count) that trace rays. It runs on one of
 //! two backends, side by side in this folder and chosen at build time: Embree 3 (`embree3.rs` +
 //! `shim3.c`, the default) or Embree 4 (`embree4.rs` + `shim4.c`, feature `embree4`). Each backend
@@ -238,6 +239,7 @@ impl Device {
             device: self.inner.clone(),
             raw: Some(raw),
             geometries: 0,
+            instanced: Vec::new(),
         })
     }
 }
@@ -253,6 +255,8 @@ pub struct SceneBuilder {
     device: Arc<DeviceInner>,
     raw: Option<sys::RTCScene>,
     geometries: u32,
+    /// The scenes this one's instances place, kept alive as long as it is.
+    instanced: Vec<Arc<Scene>>,
 }
 
 impl SceneBuilder {
@@ -353,6 +357,53 @@ impl SceneBuilder {
         })
     }
 
+    /// Adds an instance of the committed scene `prototype`, placed by the affine map
+    /// `object_to_world` (its last row must be 0 0 0 1). Hits through it report the
+    /// prototype's geometry and primitive, and this geometry's id as [`Hit::instance`].
+    pub fn add_instance(
+        &mut self,
+        prototype: &Arc<Scene>,
+        object_to_world: glam::Mat4,
+    ) -> Result<GeometryId, EmbreeError> {
+        if !Arc::ptr_eq(&prototype.device, &self.device) {
+            return Err(wrapper_error(
+                "an instance's scene belongs to another device",
+            ));
+        }
+        if !prototype.instanced.is_empty() {
+            return Err(wrapper_error("instances nest one level deep only"));
+        }
+        if !object_to_world.is_finite() || object_to_world.row(3) != glam::Vec4::W {
+            return Err(wrapper_error(format!(
+                "an instance's transform is not a finite affine map: {object_to_world:?}"
+            )));
+        }
+        if object_to_world.determinant().abs() < 1e-30 {
+            return Err(wrapper_error("an instance's transform is singular"));
+        }
+        // Column-major 3 × 4: the three columns of the linear part, then the translation.
+        let mut columns = [0.0f32; 12];
+        for (c, column) in columns.chunks_exact_mut(3).enumerate() {
+            column.copy_from_slice(&object_to_world.col(c).truncate().to_array());
+        }
+        let child = prototype.raw;
+        let id = self.attach(backend::INSTANCE, |g| {
+            // SAFETY: live instance geometry and committed scene; Embree copies the 12 floats.
+            unsafe {
+                sys::rtcSetGeometryInstancedScene(g, child);
+                sys::rtcSetGeometryTransform(
+                    g,
+                    0,
+                    backend::FLOAT3X4_COLUMN_MAJOR,
+                    columns.as_ptr() as *const c_void,
+                );
+            }
+            Ok(())
+        })?;
+        self.instanced.push(Arc::clone(prototype));
+        Ok(id)
+    }
+
     /// Builds the acceleration structure. The result cannot be changed.
     pub fn commit(mut self) -> Result<Scene, EmbreeError> {
         let raw = self.raw.take().expect("scene is present until commit");
@@ -365,6 +416,7 @@ impl SceneBuilder {
             device: self.device.clone(),
             raw,
             geometries: self.geometries,
+            instanced: std::mem::take(&mut self.instanced),
         };
         scene.device.check()?;
         Ok(scene)
@@ -405,6 +457,8 @@ pub struct Scene {
     device: Arc<DeviceInner>,
     raw: sys::RTCScene,
     geometries: u32,
+    /// The scenes this one's instances place (released after this one).
+    instanced: Vec<Arc<Scene>>,
 }
 
 // SAFETY: a committed Embree scene may be traced from any number of threads; nothing mutates it.
@@ -423,12 +477,17 @@ impl Drop for Scene {
 pub struct Hit {
     /// Distance along the ray in units of `dir`'s length.
     pub t: f32,
+    /// The geometry hit: in the top-level scene, or in the instanced scene when `instance`
+    /// is set.
     pub geometry: GeometryId,
     pub primitive: u32,
+    /// The instance geometry (of the top-level scene) the hit went through, if any.
+    pub instance: Option<GeometryId>,
     /// Barycentric coordinates of the hit (triangles: weights of vertices 1 and 2).
     pub u: f32,
     pub v: f32,
-    /// Geometric normal, unnormalised, as Embree reports it.
+    /// Geometric normal, unnormalised, as Embree reports it (in the instanced scene's space for
+    /// a hit through an instance).
     pub normal: Vec3,
 }
 
@@ -460,6 +519,7 @@ impl Scene {
             ray: raw_ray(origin, dir, tnear, tfar),
             hit: sys::RTCHit {
                 geomID: INVALID_ID,
+                instID: [INVALID_ID; 1],
                 ..Default::default()
             },
         };
@@ -471,6 +531,7 @@ impl Scene {
             t: rayhit.ray.tfar,
             geometry: h.geomID,
             primitive: h.primID,
+            instance: (h.instID[0] != INVALID_ID).then_some(h.instID[0]),
             u: h.u,
             v: h.v,
             normal: Vec3::new(h.Ng_x, h.Ng_y, h.Ng_z),
@@ -488,50 +549,4 @@ impl Scene {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn invalid_embree_call_surfaces_as_an_error() {
-        let device = Device::new().unwrap();
-        let mut builder = device.scene_builder().unwrap();
-        // An index buffer in a vertex format: Embree itself refuses it.
-        let err = builder
-            .attach(backend::TRIANGLE, |g| {
-                new_buffer::<[f32; 4]>(&device.inner, g, backend::INDEX, backend::FLOAT4, 1)
-                    .map(|_| ())
-            })
-            .unwrap_err();
-        assert_ne!(err.code, ErrorCode::Wrapper, "{err}");
-        // The device stays usable and the error does not leak into the next call.
-        builder.add_spheres(&[(Vec3::ZERO, 1.0)]).unwrap();
-        let scene = builder.commit().unwrap();
-        assert!(
-            scene
-                .intersect(Vec3::new(0.0, 0.0, -5.0), Vec3::Z, 0.0, f32::INFINITY)
-                .is_some()
-        );
-    }
-
-    #[test]
-    fn the_rays_rust_allocates_have_the_layout_the_c_compiler_gives_them() {
-        // SAFETY: the shim's size queries return constants.
-        let c = unsafe {
-            (
-                shim::dpm_rtc_sizeof_ray(),
-                shim::dpm_rtc_sizeof_rayhit(),
-                shim::dpm_rtc_alignof_rayhit(),
-                shim::dpm_rtc_offsetof_hit(),
-            )
-        };
-        let rust = (
-            std::mem::size_of::<sys::RTCRay>(),
-            std::mem::size_of::<sys::RTCRayHit>(),
-            std::mem::align_of::<sys::RTCRayHit>(),
-            std::mem::offset_of!(sys::RTCRayHit, hit),
-        );
-        assert_eq!(rust, c);
-        // Embree 3.13 and the 4.2 headers agree (4.4's larger `RTCHit` is the shim's business).
-        assert_eq!(c, (48, 80, 16, 48));
-    }
-}
+mod tests;

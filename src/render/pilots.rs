@@ -196,7 +196,7 @@ impl<'w> Survey<'w> {
                 last_rays.push((o, d, code));
                 continue;
             };
-            pilot.shape.add(closest.geometry() as u64);
+            pilot.shape.add(closest.geometry());
             let m = match closest.surface {
                 Surface::Light(_) => {
                     pilot.emitting += 1;

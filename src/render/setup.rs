@@ -179,18 +179,23 @@ pub struct Start {
 
 /// The settings every pass of this render uses.
 fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
-    let diffuse_objects = world
-        .description
-        .shapes
-        .iter()
-        .filter(|s| {
-            let m = match s {
-                scene::Shape::Sphere { material, .. } => *material,
-                scene::Shape::Triangles(t) => t.material,
-            };
-            matches!(world.material(m), Material::Diffuse { .. })
-        })
-        .count();
+    let description = &world.description;
+    let diffuse = |shapes: &[scene::Shape]| {
+        (shapes.iter())
+            .filter(|s| {
+                let m = match s {
+                    scene::Shape::Sphere { material, .. } => *material,
+                    scene::Shape::Triangles(t) => t.material,
+                };
+                matches!(world.material(m), Material::Diffuse { .. })
+            })
+            .count()
+    };
+    // Every placement of a prototype is an object of its own.
+    let diffuse_objects = diffuse(&description.shapes)
+        + (description.instances.iter())
+            .map(|i| diffuse(&description.prototypes[i.prototype as usize].shapes))
+            .sum::<usize>();
     RenderSettings {
         caustic_photons: args.caustic_photons,
         global_photons: args.global_photons.unwrap_or(if diffuse_objects >= 2 {

@@ -39,6 +39,9 @@ pub struct SceneDescription {
     /// Scene materials in name order, then materials taken from MTL files in order of first use.
     pub materials: Vec<Material>,
     pub shapes: Vec<Shape>,
+    /// Groups of shapes defined once and placed by [`SceneDescription::instances`].
+    pub prototypes: Vec<Prototype>,
+    pub instances: Vec<Instance>,
     /// What the written image's pixels are multiplied by (pbrt's film settings; the TOML
     /// format leaves every image as rendered).
     pub response: ImageResponse,
@@ -245,6 +248,24 @@ pub enum Shape {
     Triangles(TriangleMesh),
 }
 
+/// Shapes defined once in a space of their own and placed any number of times (pbrt's
+/// `ObjectBegin`/`ObjectInstance`): their materials index [`SceneDescription::materials`];
+/// they carry no lights.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Prototype {
+    pub name: String,
+    pub shapes: Vec<Shape>,
+}
+
+/// One placement of a [`Prototype`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// Indexes [`SceneDescription::prototypes`].
+    pub prototype: u32,
+    /// From the prototype's space to the world's: affine and invertible.
+    pub object_to_world: glam::Mat4,
+}
+
 /// World-space triangles with one material; `normals`, when present, are per vertex and unit.
 /// Triangles are wound counter-clockwise seen from the side their geometric normal points to;
 /// none has zero area.
@@ -435,6 +456,8 @@ pub fn parse_with(
         lights,
         materials: materials.into_materials(),
         shapes,
+        prototypes: Vec::new(),
+        instances: Vec::new(),
         response: ImageResponse::default(),
     };
     report

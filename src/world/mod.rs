@@ -7,26 +7,17 @@
 pub mod aim;
 pub mod aim_grid;
 pub mod aim_guide;
+mod hit_normals;
+mod instancing;
 pub mod lights;
 
 use crate::embree::{self, EmbreeError};
 use crate::scene::{Light, Material, SceneDescription, Shape, TriangleMesh};
 use glam::Vec3;
+use hit_normals::{HitNormals, TriangleNormals, normals_at, sphere_normals};
+use instancing::Instancing;
 use lights::LightSource;
 use std::sync::Arc;
-
-/// How a hit on one Embree geometry finds its normals: everything resolving a hit reads, in
-/// one place per geometry id (not a kind, then the scene's shape or light, then its normals).
-enum HitNormals {
-    /// A sphere, object or light: outward, (position − centre) / radius.
-    Sphere {
-        center: Vec3,
-        inverse_radius: f32,
-    },
-    /// One normal for the whole geometry (a quad light's).
-    Fixed(Vec3),
-    Triangles(TriangleNormals),
-}
 
 /// What was hit: a surface with a material, or an area light.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -66,49 +57,33 @@ impl Interaction {
     }
 }
 
-/// What resolving a hit on a mesh reads, laid out by triangle so that a hit reads one place
-/// (not three indices and then three vertices and three normals scattered over the mesh).
-enum TriangleNormals {
-    /// Unit geometric normal of each triangle.
-    Flat(Vec<Vec3>),
-    /// Unit geometric normal and the three vertex normals of each triangle.
-    Smooth(Vec<[Vec3; 4]>),
-}
-
-impl TriangleNormals {
-    fn new(mesh: &TriangleMesh) -> Self {
-        let geometric = |t: &[u32; 3]| {
-            let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
-            (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z)
-        };
-        match &mesh.normals {
-            None => Self::Flat(mesh.triangles.iter().map(geometric).collect()),
-            Some(n) => Self::Smooth(
-                mesh.triangles
-                    .iter()
-                    .map(|t| {
-                        let [n0, n1, n2] = t.map(|i| n[i as usize]);
-                        [geometric(t), n0, n1, n2]
-                    })
-                    .collect(),
-            ),
+/// Adds `shape` to `builder`: how its hits find their normals, its box and its material.
+fn add_shape(
+    builder: &mut embree::SceneBuilder,
+    shape: &Shape,
+) -> Result<(HitNormals, (Vec3, Vec3), u32), EmbreeError> {
+    Ok(match shape {
+        Shape::Sphere {
+            center,
+            radius,
+            material,
+        } => {
+            builder.add_spheres(&[(*center, *radius)])?;
+            let r = Vec3::splat(*radius);
+            (
+                sphere_normals(*center, *radius),
+                (*center - r, *center + r),
+                *material,
+            )
         }
-    }
-}
-
-fn sphere_normals(center: Vec3, radius: f32) -> HitNormals {
-    HitNormals::Sphere {
-        center,
-        inverse_radius: 1.0 / radius,
-    }
-}
-
-/// `v` brought to unit length by one Newton step on 1/|v|, for a `v` already close to it (a
-/// point on a sphere over its radius: off by Embree's hit error, up to about 2e-5, tested):
-/// the step squares that error, without the square root and division of normalising.
-#[inline(always)]
-fn unit_within_rounding(v: Vec3) -> Vec3 {
-    v * (1.5 - 0.5 * v.length_squared())
+        Shape::Triangles(mesh) => {
+            builder.add_triangles(&mesh.positions, &mesh.triangles)?;
+            let a = mesh.positions.iter().fold(Vec3::MAX, |m, p| m.min(*p));
+            let b = mesh.positions.iter().fold(Vec3::MIN, |m, p| m.max(*p));
+            let hit_normals = HitNormals::Triangles(TriangleNormals::new(mesh));
+            (hit_normals, (a, b), mesh.material)
+        }
+    })
 }
 
 /// A bounding sphere, used to aim caustic photons at specular objects.
@@ -146,9 +121,11 @@ impl ClosestHit {
         self.hit.t
     }
 
-    /// The object hit (its Embree geometry), the same for every hit of one shape.
-    pub fn geometry(&self) -> u32 {
-        self.hit.geometry
+    /// The object hit (its Embree geometry, and the instance it was hit through), the same
+    /// for every hit of one placed shape.
+    pub fn geometry(&self) -> u64 {
+        let instance = self.hit.instance.map_or(0, |i| u64::from(i) + 1);
+        (instance << 32) | u64::from(self.hit.geometry)
     }
 }
 
@@ -159,6 +136,8 @@ pub struct World {
     surfaces: Vec<Surface>,
     /// How each geometry id's hits find their normals.
     normals: Vec<HitNormals>,
+    /// The prototypes hits through an instance resolve in.
+    instancing: Instancing,
     /// Where caustic photons are aimed: a sphere around each mirror and glass object, or one
     /// around them all past [`aim::MAX_TARGETS`]; empty when the scene has none.
     pub caustic_targets: Vec<BoundingSphere>,
@@ -188,34 +167,7 @@ impl World {
         let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let mut specular_shapes = Vec::new();
         for shape in &description.shapes {
-            let (hit_normals, (a, b), material) = match shape {
-                Shape::Sphere {
-                    center,
-                    radius,
-                    material,
-                } => {
-                    builder.add_spheres(&[(*center, *radius)])?;
-                    let r = Vec3::splat(*radius);
-                    (
-                        sphere_normals(*center, *radius),
-                        (*center - r, *center + r),
-                        *material,
-                    )
-                }
-                Shape::Triangles(mesh) => {
-                    builder.add_triangles(&mesh.positions, &mesh.triangles)?;
-                    let a = mesh
-                        .positions
-                        .iter()
-                        .fold(Vec3::splat(f32::MAX), |m, p| m.min(*p));
-                    let b = mesh
-                        .positions
-                        .iter()
-                        .fold(Vec3::splat(f32::MIN), |m, p| m.max(*p));
-                    let hit_normals = HitNormals::Triangles(TriangleNormals::new(mesh));
-                    (hit_normals, (a, b), mesh.material)
-                }
-            };
+            let (hit_normals, (a, b), material) = add_shape(&mut builder, shape)?;
             surfaces.push(Surface::Material(material));
             normals.push(hit_normals);
             lo = lo.min(a);
@@ -285,11 +237,32 @@ impl World {
             }
             surfaces.push(Surface::Light(i));
         }
+        let (instancing, extent) = Instancing::build(&device, &description, &mut builder)?;
+        for (a, b) in &extent.boxes {
+            (lo, hi) = (lo.min(*a), hi.max(*b));
+        }
+        for (a, b) in &extent.specular_boxes {
+            (spec_lo, spec_hi) = (spec_lo.min(*a), spec_hi.max(*b));
+        }
         let accel = builder.commit()?;
-        let caustic_targets = if specular_shapes.len() > aim::MAX_TARGETS {
-            vec![BoundingSphere::around_box(spec_lo, spec_hi)]
-        } else {
+        let specular = specular_shapes.len() + extent.specular_shapes;
+        let union = || vec![BoundingSphere::around_box(spec_lo, spec_hi)];
+        let caustic_targets = if specular > aim::MAX_TARGETS {
+            union()
+        } else if extent.specular_shapes == 0 {
             aim::targets(&specular_shapes)
+        } else {
+            // Placed prototypes' own targets while they fit, else a sphere a placement.
+            let mut targets = aim::targets(&specular_shapes);
+            if targets.len() + extent.targets.len() <= aim::MAX_TARGETS {
+                targets.extend(extent.targets);
+            } else if targets.len() + extent.specular_boxes.len() <= aim::MAX_TARGETS {
+                let placed = extent.specular_boxes.iter();
+                targets.extend(placed.map(|&(a, b)| BoundingSphere::around_box(a, b)));
+            } else {
+                targets = union();
+            }
+            targets
         };
         let scale = if lo.x <= hi.x {
             (hi - lo).length().max(1e-12)
@@ -325,6 +298,7 @@ impl World {
             accel,
             surfaces,
             normals,
+            instancing,
             caustic_targets,
             caustic_guide: Vec::new(),
             scale,
@@ -368,9 +342,11 @@ impl World {
 
     /// Whether any object is diffuse (so photons have somewhere to be stored).
     pub fn has_diffuse(&self) -> bool {
-        self.surfaces.iter().any(|s| {
-            matches!(s, Surface::Material(m) if matches!(self.material(*m), Material::Diffuse { .. }))
-        })
+        (self.surfaces.iter().copied())
+            .chain(self.instancing.placed_surfaces())
+            .any(|s| {
+                matches!(s, Surface::Material(m) if matches!(self.material(m), Material::Diffuse { .. }))
+            })
     }
 
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {
@@ -400,11 +376,15 @@ impl World {
         tfar: f32,
     ) -> Option<ClosestHit> {
         let hit = self.accel.intersect(origin, dir, tnear, tfar)?;
+        let surface = match hit.instance {
+            None => self.surfaces[hit.geometry as usize],
+            Some(instance) => self.instancing.surface(instance, hit.geometry),
+        };
         Some(ClosestHit {
             hit,
             origin,
             dir,
-            surface: self.surfaces[hit.geometry as usize],
+            surface,
         })
     }
 
@@ -418,25 +398,9 @@ impl World {
             surface,
         } = closest;
         let position = origin + hit.t * dir;
-        let (geometric_normal, shading_normal) = match &self.normals[hit.geometry as usize] {
-            HitNormals::Sphere {
-                center,
-                inverse_radius,
-            } => {
-                let n = unit_within_rounding((position - *center) * *inverse_radius);
-                (n, n)
-            }
-            HitNormals::Fixed(n) => (*n, *n),
-            HitNormals::Triangles(TriangleNormals::Flat(normals)) => {
-                let n = normals[hit.primitive as usize];
-                (n, n)
-            }
-            HitNormals::Triangles(TriangleNormals::Smooth(normals)) => {
-                let [ng, n0, n1, n2] = normals[hit.primitive as usize];
-                let s = (1.0 - hit.u - hit.v) * n0 + hit.u * n1 + hit.v * n2;
-                let s = s.normalize_or(ng);
-                (ng, if s.dot(ng) < 0.0 { -s } else { s })
-            }
+        let (geometric_normal, shading_normal) = match hit.instance {
+            None => normals_at(&self.normals[hit.geometry as usize], &hit, position),
+            Some(instance) => self.instancing.normals(instance, &hit, position),
         };
         Interaction {
             t: hit.t,

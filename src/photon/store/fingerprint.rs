@@ -169,8 +169,29 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
             }
         }
     }
-    h.u64(scene.shapes.len() as u64);
-    for shape in &scene.shapes {
+    shapes(&mut h, &scene.shapes);
+    // Instanced scenes only: a scene without them hashes as it always has.
+    if !scene.instances.is_empty() {
+        h.u64(scene.prototypes.len() as u64);
+        for prototype in &scene.prototypes {
+            shapes(&mut h, &prototype.shapes);
+        }
+        h.u64(scene.instances.len() as u64);
+        for instance in &scene.instances {
+            h.u32(instance.prototype);
+            instance
+                .object_to_world
+                .to_cols_array()
+                .iter()
+                .for_each(|&x| h.f32(x));
+        }
+    }
+    h.finish()
+}
+
+fn shapes(h: &mut Fnv64, shapes: &[Shape]) {
+    h.u64(shapes.len() as u64);
+    for shape in shapes {
         match shape {
             Shape::Sphere {
                 center,
@@ -188,5 +209,4 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
             }
         }
     }
-    h.finish()
 }

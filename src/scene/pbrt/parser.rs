@@ -8,6 +8,7 @@
 
 mod graphics_state;
 mod include;
+mod instancing;
 
 use super::args::Args;
 use super::cursor::Cursor;
@@ -52,6 +53,24 @@ pub(super) struct ShapeItem {
     pub material: Option<usize>,
     /// Index into [`Parsed::area_lights`].
     pub area_light: Option<usize>,
+    /// Index into [`Parsed::objects`] when the shape belongs to an object definition.
+    pub object: Option<usize>,
+}
+
+/// An `ObjectBegin` definition.
+#[derive(Debug)]
+pub(super) struct ObjectItem {
+    pub name: String,
+    pub at: Place,
+}
+
+/// An `ObjectInstance`: which object, placed by which transform.
+#[derive(Debug)]
+pub(super) struct InstanceItem {
+    /// Index into [`Parsed::objects`].
+    pub object: usize,
+    pub ctm: Mat4,
+    pub at: Place,
 }
 
 /// What the files say, in order, with their transforms resolved.
@@ -65,6 +84,8 @@ pub(super) struct Parsed {
     /// `Material` and `MakeNamedMaterial` definitions; a named one carries its name.
     pub materials: Vec<(Option<String>, Item)>,
     pub area_lights: Vec<Item>,
+    pub objects: Vec<ObjectItem>,
+    pub instances: Vec<InstanceItem>,
     /// Directives read and deliberately not used (Sampler, Integrator, ...), for the report.
     pub ignored: Vec<String>,
     pub warnings: Vec<String>,
@@ -106,6 +127,9 @@ pub(super) struct Parser<'f> {
     importing: Vec<PathBuf>,
     /// The media directives read and ignored, named in one warning at the end.
     media: Vec<String>,
+    /// The object being defined (between ObjectBegin and ObjectEnd).
+    object: Option<usize>,
+    named_objects: HashMap<String, usize>,
 }
 
 /// Reads `path` and everything it includes from `files`.
@@ -122,6 +146,8 @@ pub(super) fn parse(path: &Path, files: &dyn SceneFiles) -> Result<Parsed, PbrtE
         search_folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         importing: Vec::new(),
         media: Vec::new(),
+        object: None,
+        named_objects: HashMap::new(),
     };
     let (tokens, identity) = parser.open_file(path, None, None)?;
     parser.run(&mut Cursor::new(tokens, identity))?;
@@ -343,14 +369,12 @@ impl Parser<'_> {
                     reverse_orientation: self.state.reverse_orientation,
                     material: self.state.material,
                     area_light: self.state.area_light,
+                    object: self.object,
                 });
             }
             "Include" | "Import" => self.include(directive, args)?,
             "ObjectBegin" | "ObjectEnd" | "ObjectInstance" => {
-                return Err(place.error(
-                    directive,
-                    "object instancing is not supported: flatten the instances into shapes",
-                ));
+                self.object_directive(directive, args, place)?;
             }
             other => {
                 return Err(place.error("syntax", format!("`{other}` is not a pbrt directive")));

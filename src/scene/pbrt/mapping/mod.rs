@@ -18,7 +18,8 @@ use super::parser::{CameraItem, Item, Parsed};
 use super::{Dialect, Place};
 use crate::scene::files::SceneFiles;
 use crate::scene::{
-    Camera, Handedness, LoadOptions, LoadReport, Material, SceneDescription, SceneError, validate,
+    Camera, Handedness, Instance, LoadOptions, LoadReport, Material, Prototype, SceneDescription,
+    SceneError, validate,
 };
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
@@ -85,7 +86,25 @@ pub(super) fn scene(
         m.unused(&light.item, "LightSource");
     }
     let mut shapes = Vec::new();
+    let mut prototypes: Vec<Prototype> = (parsed.objects.iter())
+        .map(|o| Prototype {
+            name: o.name.clone(),
+            shapes: Vec::new(),
+        })
+        .collect();
     for shape in &parsed.shapes {
+        if let Some(object) = shape.object {
+            if shape.area_light.is_some() {
+                m.warn(
+                    &shape.item.at,
+                    "an area light inside an object is not instanced (as in pbrt): the shape is placed without it".into(),
+                );
+            }
+            let material = m.material_of(shape.material, &parsed)?;
+            prototypes[object].shapes.extend(m.shape(shape, material)?);
+            m.unused(&shape.item, "Shape");
+            continue;
+        }
         match shape.area_light {
             Some(a) => {
                 let area = &parsed.area_lights[a];
@@ -110,7 +129,8 @@ pub(super) fn scene(
             "the scene has no light dpm can use (LightSource or AreaLightSource)",
         ));
     }
-    if shapes.is_empty() {
+    let instances = instances(&parsed, &prototypes)?;
+    if shapes.is_empty() && instances.is_empty() {
         return Err(first().error("Shape", "the scene has no shapes besides its lights"));
     }
     let scene = SceneDescription {
@@ -119,6 +139,8 @@ pub(super) fn scene(
         lights,
         materials: m.materials,
         shapes,
+        prototypes,
+        instances,
         response,
     };
     let mut report = m.report;
@@ -126,6 +148,33 @@ pub(super) fn scene(
         .warnings
         .extend(validate::enclosed_light_warnings(&scene));
     Ok((scene, report))
+}
+
+/// pbrt's `ObjectInstance`s, placing prototypes that have shapes by transforms that can be
+/// inverted.
+fn instances(parsed: &Parsed, prototypes: &[Prototype]) -> Result<Vec<Instance>, SceneError> {
+    let mut instances = Vec::with_capacity(parsed.instances.len());
+    for instance in &parsed.instances {
+        let m = instance.ctm;
+        let affine = m.row(3) == glam::Vec4::W;
+        let determinant = m.determinant();
+        if !(m.is_finite() && affine && determinant.is_normal()) {
+            return Err(instance.at.error(
+                "ObjectInstance",
+                format!(
+                    "the current transform does not place an object (it must be an invertible affine map; determinant {determinant})"
+                ),
+            ));
+        }
+        if prototypes[instance.object].shapes.is_empty() {
+            continue;
+        }
+        instances.push(Instance {
+            prototype: instance.object as u32,
+            object_to_world: m,
+        });
+    }
+    Ok(instances)
 }
 
 impl Mapper<'_> {

@@ -149,7 +149,7 @@ impl Parser<'_> {
         Ok(true)
     }
 
-    fn pop(&mut self, directive: &str, place: &Place) -> Result<(), PbrtError> {
+    pub(super) fn pop(&mut self, directive: &str, place: &Place) -> Result<(), PbrtError> {
         let want_attributes = directive == "AttributeEnd";
         let (begin, other) = if want_attributes {
             ("AttributeBegin", "TransformBegin")
