@@ -8,7 +8,7 @@ mod support;
 use dpm::estimate::{KnnEstimate, Query, RadialKernel, RadianceEstimate, Scratch};
 use dpm::photon::tracer::{MapKind, trace_map, trace_photons};
 use dpm::photon::{Neighbours, PhotonMap};
-use dpm::render::PinholeCamera;
+use dpm::render::RayCamera;
 use dpm::render::pipeline;
 use dpm::scene::Material;
 use dpm::world::{Surface, World};
@@ -388,12 +388,12 @@ fn render_cornell(text: &str, extra: &[&str]) -> pipeline::RenderOutcome {
 /// First hits of the pixel-centre rays that land on a diffuse surface.
 fn diffuse_first_hits(world: &World) -> Vec<(usize, usize)> {
     let cam = &world.description.camera;
-    let camera = PinholeCamera::new(cam);
+    let camera = RayCamera::new(cam);
     let mut out = Vec::new();
     for y in 0..cam.height as usize {
         for x in 0..cam.width as usize {
-            let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
-            if let Some(hit) = world.intersect(camera.origin(), d, 0.0, f32::INFINITY)
+            let ray = camera.chief_ray(x as f32 + 0.5, y as f32 + 0.5);
+            if let Some(hit) = world.intersect(ray.origin, ray.direction, 0.0, f32::INFINITY)
                 && let Surface::Material(m) = hit.surface
                 && matches!(world.material(m), Material::Diffuse { .. })
             {

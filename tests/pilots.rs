@@ -7,7 +7,7 @@
 
 mod support;
 
-use dpm::render::PinholeCamera;
+use dpm::render::RayCamera;
 use dpm::render::pilots::PixelPlan;
 use dpm::render::pipeline;
 use glam::DVec3;
@@ -43,7 +43,7 @@ fn world_x(column: f64, depth: f64) -> f64 {
 
 fn plan(text: &str, emission: u32, edge: u32) -> PixelPlan {
     let desc = description(text);
-    let camera = PinholeCamera::new(&desc.camera);
+    let camera = RayCamera::new(&desc.camera);
     let world = dpm::world::World::new(desc).expect("world");
     in_pool(2, || PixelPlan::survey(&camera, &world, 10, emission, edge)).expect("not interrupted")
 }

@@ -13,7 +13,7 @@
 //! sees. Landings outside the camera's view are worth nothing (the guide's uniform share still
 //! sends photons there, for the mirrors and glass that may show them).
 
-use super::PinholeCamera;
+use super::RayCamera;
 use super::pass::RenderSettings;
 use crate::photon::Neighbours;
 use crate::photon::guide::{Landing, PilotPhotons};
@@ -33,7 +33,7 @@ pub fn learn(world: &mut World, settings: &RenderSettings, seed: u64, times: &mu
     if settings.guide_paths == 0 || world.caustic_targets.is_empty() {
         return;
     }
-    let camera = PinholeCamera::new(&world.description.camera);
+    let camera = RayCamera::new(&world.description.camera);
     let guide = times.time("caustic guide", || {
         crate::photon::guide::learn_caustic_guide(
             world,
@@ -56,7 +56,7 @@ pub fn learn(world: &mut World, settings: &RenderSettings, seed: u64, times: &mu
 /// One number per landing: 1 / √(R² + ε²) where the camera sees it, 0 elsewhere.
 pub fn landing_worth(
     world: &World,
-    camera: &PinholeCamera,
+    camera: &RayCamera,
     seed: u64,
     landings: &[Landing],
     pilots: &PilotPhotons,
@@ -100,15 +100,18 @@ fn direct_irradiance(world: &World, p: Vec3, n: Vec3, rng: &mut Rng) -> f32 {
 
 /// Mean direct irradiance over a grid of camera rays (pixel centres of a coarse image): at a
 /// diffuse first hit the direct light there, anywhere else nothing.
-fn mean_direct_irradiance(world: &World, camera: &PinholeCamera, seed: u64) -> f32 {
-    let (w, h) = (camera.width() as f32, camera.height() as f32);
+fn mean_direct_irradiance(world: &World, camera: &RayCamera, seed: u64) -> f32 {
+    // The full film's grid: a crop keeps the full render's guide.
+    let (w, h) = camera.film_size();
+    let (w, h) = (w as f32, h as f32);
     let sum: f64 = (0..GRID * GRID)
         .into_par_iter()
         .map(|i| {
             let x = ((i % GRID) as f32 + 0.5) / GRID as f32 * w;
             let y = ((i / GRID) as f32 + 0.5) / GRID as f32 * h;
-            let dir = camera.direction(x, y);
-            let Some(closest) = world.closest_hit(camera.origin(), dir, 0.0, f32::INFINITY) else {
+            let ray = camera.chief_ray(x, y);
+            let dir = ray.direction;
+            let Some(closest) = world.closest_hit(ray.origin, dir, 0.0, f32::INFINITY) else {
                 return 0.0;
             };
             let Surface::Material(m) = closest.surface else {

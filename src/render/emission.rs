@@ -10,21 +10,20 @@
 //! ([`super::pilots::PixelPlan`]). Owns the emission samples' estimate; must not choose the
 //! pixels or shade diffuse surfaces.
 
-use super::camera::PinholeCamera;
+use super::camera::CameraRay;
 use super::integrator::Integrator;
 use glam::Vec3;
 
-/// The mean of a flagged pixel's emission samples: `positions` are its sample positions in
-/// pixels (image coordinates), each with the random stream for its glass choices.
+/// The mean of a flagged pixel's emission samples: their camera rays (through the pixel and
+/// the lens, as its camera samples go), each with the random stream for its glass choices.
 pub fn emitted_mean(
-    camera: &PinholeCamera,
     integrator: &Integrator,
-    samples: impl ExactSizeIterator<Item = ((f32, f32), crate::sampling::Rng)>,
+    samples: impl ExactSizeIterator<Item = (CameraRay, crate::sampling::Rng)>,
 ) -> Vec3 {
     let n = samples.len().max(1) as f32;
     let mut sum = Vec3::ZERO;
-    for ((x, y), mut rng) in samples {
-        sum += integrator.emitted(camera.origin(), camera.direction(x, y), &mut rng);
+    for (ray, mut rng) in samples {
+        sum += integrator.emitted(ray.origin, ray.direction, &mut rng);
     }
     sum / n
 }

@@ -83,7 +83,8 @@ pub(super) fn check_memory(
 ) -> Result<(), RenderError> {
     let camera = &world.description.camera;
     let diffusion = estimator == EstimatorKind::Diffusion;
-    let needed = memory_estimate(wanted, diffusion, camera.width, camera.height);
+    let (width, height) = camera.image_size();
+    let needed = memory_estimate(wanted, diffusion, width, height);
     let (available, source) = available_memory();
     if needed <= available {
         return Ok(());
@@ -95,10 +96,7 @@ pub(super) fn check_memory(
             MapKind::Global { .. } => format!("--global-photons {}", w.target),
         })
         .collect();
-    what.push(format!(
-        "a {}x{} image (camera.resolution)",
-        camera.width, camera.height
-    ));
+    what.push(format!("a {}x{} image (camera.resolution)", width, height));
     Err(RenderError::Invalid(format!(
         "{} would need about {} of memory ({} bytes a photon{}, {BYTES_PER_PIXEL} a pixel), but \
          only {} is available ({source}); lower the photon counts or the resolution",

@@ -29,5 +29,5 @@ pub mod pipeline;
 pub mod schedule;
 pub mod setup;
 
-pub use camera::{PassSamples, PinholeCamera};
+pub use camera::{PassSamples, RayCamera};
 pub use film::{Film, PassImage};

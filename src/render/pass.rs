@@ -16,7 +16,7 @@
 //! Normalisation: each pass's maps carry their own emitted count, so each pass is an
 //! estimate of the whole image on its own and the film averages passes with equal weights.
 
-use super::camera::{PassSamples, PinholeCamera};
+use super::camera::{PassSamples, RayCamera};
 use super::emission::emitted_mean;
 use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
 use super::integrator::Emission;
@@ -214,7 +214,7 @@ pub struct PassReport {
 /// Everything a pass needs besides its maps.
 pub struct PassContext<'a> {
     pub world: &'a World,
-    pub camera: PinholeCamera,
+    pub camera: RayCamera,
     pub settings: &'a RenderSettings,
     pub radii: BaseRadii,
     pub schedule: Schedule,
@@ -429,7 +429,7 @@ const EDGE_GLASS_SPLIT_DEPTH: u32 = 1;
 /// Pixels not yet started when an interruption is requested are left black; the caller must
 /// check for it and discard the pass.
 pub fn shade_pass(
-    camera: &PinholeCamera,
+    camera: &RayCamera,
     integrator: &Integrator,
     samples: &PassSamples,
     plan: Option<&PixelPlan>,
@@ -458,14 +458,18 @@ pub fn shade_pass(
                 if crate::interrupt::requested() {
                     return;
                 }
-                let pixel = (y * w + x) as u64;
-                let apart = plan.filter(|p| p.emission_apart(pixel as usize));
+                // The plan is the image's; the samples are keyed by the full film's pixel.
+                let pixel = y * w + x;
+                let key = camera.pixel_key(x, y);
+                let (fx, fy) = camera.film_pixel(x, y);
+                let (fx, fy) = (fx as f32, fy as f32);
+                let apart = plan.filter(|p| p.emission_apart(pixel));
                 let counted = if apart.is_some() {
                     Emission::Elsewhere
                 } else {
                     Emission::Counted
                 };
-                let count = plan.map_or(spp, |p| p.camera_samples(pixel as usize, spp));
+                let count = plan.map_or(spp, |p| p.camera_samples(pixel, spp));
                 let integrator = if count > spp {
                     &edge_integrator
                 } else {
@@ -473,20 +477,28 @@ pub fn shade_pass(
                 };
                 let mut sum = Radiance::default();
                 for s in 0..count {
-                    let sample = samples.sample_of(pixel, s, count);
+                    let sample = samples.sample_of(key, s, count);
                     let (jx, jy) = sample.jitter;
-                    let d = camera.direction(x as f32 + jx, y as f32 + jy);
+                    let ray = camera.ray(fx + jx, fy + jy, sample.lens);
                     let mut sampler = PathSampler::new(sample.rng, Some(sample.sequence));
-                    sum += integrator.trace(camera.origin(), d, 0, counted, &mut sampler, scratch);
+                    sum += integrator.trace(
+                        ray.origin,
+                        ray.direction,
+                        0,
+                        counted,
+                        &mut sampler,
+                        scratch,
+                    );
                 }
                 let mut mean = (1.0 / count.max(1) as f32) * sum;
                 if let Some(p) = apart {
                     let n = p.emission_samples();
                     let at = (0..n).map(|j| {
-                        let ((jx, jy), rng) = samples.emission_sample(pixel, j, n);
-                        ((x as f32 + jx, y as f32 + jy), rng)
+                        let sample = samples.emission_sample(key, j, n);
+                        let (jx, jy) = sample.jitter;
+                        (camera.ray(fx + jx, fy + jy, sample.lens), sample.rng)
                     });
-                    mean.direct += emitted_mean(camera, integrator, at);
+                    mean.direct += emitted_mean(integrator, at);
                 }
                 for (i, v) in [mean.total(), mean.direct, mean.caustic, mean.indirect]
                     .iter()
@@ -495,8 +507,8 @@ pub fn shade_pass(
                     px[3 * i..3 * i + 3].copy_from_slice(&v.to_array());
                 }
                 if let Some(p) = probe {
-                    let d = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
-                    px[12..15].copy_from_slice(&p.channels(camera.origin(), d, scratch));
+                    let ray = camera.chief_ray(fx + 0.5, fy + 0.5);
+                    px[12..15].copy_from_slice(&p.channels(ray.origin, ray.direction, scratch));
                 }
             }
             progress.inc(1);

@@ -8,7 +8,7 @@
 //! and when they are written; must not decide what a pass computes.
 
 use super::args::RenderArgs;
-use super::camera::PinholeCamera;
+use super::camera::RayCamera;
 use super::film::Film;
 use super::pass::{PassContext, PassReport};
 use super::photon_files::{load_maps, save_maps};
@@ -29,7 +29,7 @@ pub struct PassLoop<'a> {
     pub args: &'a RenderArgs,
     pub world: &'a World,
     pub wiring: &'a Wiring,
-    pub camera: PinholeCamera,
+    pub camera: RayCamera,
     pub plan: &'a PixelPlan,
     pub reference: Option<Image>,
     pub output: &'a Path,

@@ -16,7 +16,7 @@
 //! Decided from the geometry alone, so that every pass, thread count and shard agrees. Owns
 //! that plan; must not shade or estimate.
 
-use super::camera::PinholeCamera;
+use super::camera::RayCamera;
 use crate::optics::{fresnel_dielectric, reflect, refract};
 use crate::scene::Material;
 use crate::world::lights::LightShape;
@@ -43,7 +43,7 @@ impl PixelPlan {
     /// bounces, as camera paths do. With both counts 0 no pilot is traced. `None` if an
     /// interruption was requested meanwhile.
     pub fn survey(
-        camera: &PinholeCamera,
+        camera: &RayCamera,
         world: &World,
         max_depth: u32,
         emission_samples: u32,
@@ -59,7 +59,12 @@ impl PixelPlan {
             return Some(plan);
         }
         let survey = Survey::new(world, max_depth);
-        let pilot = |x: f32, y: f32| survey.pilot(camera.origin(), camera.direction(x, y));
+        // Through the lens's centre: a pilot stands for the pixel's whole aperture.
+        let pilot = |x: usize, y: usize, inset: f32| {
+            let (fx, fy) = camera.film_pixel(x, y);
+            let ray = camera.chief_ray(fx as f32 + inset, fy as f32 + inset);
+            survey.pilot(ray.origin, ray.direction)
+        };
         // Row by row, so that an interruption is noticed within one row.
         let rows = |count: usize, width: usize, at: &(dyn Fn(usize, usize) -> Pilot + Sync)| {
             (0..count)
@@ -72,8 +77,8 @@ impl PixelPlan {
                 })
                 .collect::<Vec<_>>()
         };
-        let corners = rows(h + 1, w + 1, &|x, y| pilot(x as f32, y as f32));
-        let centres = rows(h, w, &|x, y| pilot(x as f32 + 0.5, y as f32 + 0.5));
+        let corners = rows(h + 1, w + 1, &|x, y| pilot(x, y, 0.0));
+        let centres = rows(h, w, &|x, y| pilot(x, y, 0.5));
         if crate::interrupt::requested() {
             return None;
         }

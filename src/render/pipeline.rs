@@ -11,7 +11,7 @@ pub use super::args::{
     DEFAULT_GLOBAL_PHOTONS, DEFAULT_PASSES, DEFAULT_RADIUS_K, MAX_EDGE_SAMPLES,
     MAX_EMISSION_SAMPLES, MAX_IRRADIANCE_STRIDE, MAX_LIGHT_SAMPLES, RenderArgs, parse_resolution,
 };
-use super::camera::PinholeCamera;
+use super::camera::RayCamera;
 use super::film::Film;
 use super::film_file::{self, FilmFileError};
 use super::output::{write_film_image, write_kernel_field};
@@ -231,11 +231,14 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     let wiring = Wiring::new(args, &mut world, scene_hash, &output, &mut times)?;
     let camera = &world.description.camera;
     let reference = match &args.reference {
-        Some(path) => Some(read_reference(path, camera.width, camera.height)?),
+        Some(path) => {
+            let (width, height) = camera.image_size();
+            Some(read_reference(path, width, height)?)
+        }
         None => None,
     };
     let start = wiring.start(args, &world, &mut times)?;
-    let camera = PinholeCamera::new(camera);
+    let camera = RayCamera::new(camera);
     let Some(plan) = survey_pixels(&camera, &world, &wiring.settings, &mut times) else {
         return Err(RenderError::Interrupted {
             output,

@@ -6,7 +6,7 @@
 //! needs for its radii.
 
 use super::args::{DEFAULT_GLOBAL_PHOTONS, DEFAULT_RADIUS_K, RenderArgs};
-use super::camera::PinholeCamera;
+use super::camera::RayCamera;
 use super::film::{Film, FilmHeader};
 use super::film_file;
 use super::memory_budget::check_memory;
@@ -23,7 +23,8 @@ use crate::timing::PhaseTimes;
 use crate::world::World;
 use std::path::Path;
 
-/// Loads the scene (at `--resolution` if given, the vertical field of view kept), reports what
+/// Loads the scene (at `--resolution` if given, the vertical field of view or orthographic view
+/// height kept, and the crop window's fractions of the film), reports what
 /// loading repaired, and builds its Embree world; returns it with the scene's fingerprint.
 pub fn load_world(args: &RenderArgs, times: &mut PhaseTimes) -> Result<(World, u64), RenderError> {
     let (mut description, report) = times.time("load scene", || {
@@ -35,6 +36,11 @@ pub fn load_world(args: &RenderArgs, times: &mut PhaseTimes) -> Result<(World, u
     if let Some((width, height)) = args.resolution {
         description.camera.width = width;
         description.camera.height = height;
+        if matches!(description.camera.image_size(), (0, _) | (_, 0)) {
+            return Err(RenderError::Invalid(format!(
+                "--resolution {width}x{height}: the scene's crop window holds no whole pixel of that film"
+            )));
+        }
     }
     report_load(args, &report, times);
     let scene_hash = store::scene_fingerprint(&description);
@@ -103,13 +109,13 @@ impl Wiring {
 
     /// The film header of this render once pass 0's base radii are known.
     pub fn header(&self, args: &RenderArgs, world: &World, radii: BaseRadii) -> FilmHeader {
-        let camera = &world.description.camera;
+        let (width, height) = world.description.camera.image_size();
         FilmHeader {
             scene_file: args.scene.display().to_string(),
             scene_hash: self.scene_hash,
             seed: args.seed,
-            width: camera.width as usize,
-            height: camera.height as usize,
+            width: width as usize,
+            height: height as usize,
             settings: self.settings.clone(),
             radii,
             kernel_field: self.kernel_field,
@@ -224,7 +230,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
 
 /// The pilot rays' plan of every pixel (once per render); None when interrupted.
 pub fn survey_pixels(
-    camera: &PinholeCamera,
+    camera: &RayCamera,
     world: &World,
     settings: &RenderSettings,
     times: &mut PhaseTimes,

@@ -38,13 +38,43 @@ pub(crate) struct CameraSpec {
     pub position: [f32; 3],
     pub look_at: [f32; 3],
     pub up: [f32; 3],
-    /// Vertical field of view in degrees.
-    pub fov_y: f32,
+    /// `"perspective"` (default), `"orthographic"` or `"environment"`.
+    #[serde(default)]
+    pub projection: ProjectionSpec,
+    /// Vertical field of view in degrees (perspective only, required there).
+    pub fov_y: Option<f32>,
+    /// World-space height of the film (orthographic only, required there).
+    pub view_height: Option<f32>,
+    /// Thin-lens radius (default 0: a pinhole) and focal distance (default 1e6).
+    pub lens_radius: Option<f32>,
+    pub focal_distance: Option<f32>,
     /// [width, height] in pixels.
     pub resolution: [u32; 2],
     /// `"right"` (default) or `"left"` (pbrt's camera).
     #[serde(default)]
     pub handedness: HandednessSpec,
+    /// [x0, x1, y0, y1], fractions of the film from its top-left corner (default [0, 1, 0, 1]).
+    pub crop_window: Option<[f32; 4]>,
+}
+
+#[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum ProjectionSpec {
+    #[default]
+    Perspective,
+    Orthographic,
+    Environment,
+}
+
+impl ProjectionSpec {
+    /// As the scene file spells it.
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            ProjectionSpec::Perspective => "perspective",
+            ProjectionSpec::Orthographic => "orthographic",
+            ProjectionSpec::Environment => "environment",
+        }
+    }
 }
 
 #[derive(Deserialize, Default, Clone, Copy)]

@@ -81,18 +81,113 @@ impl ImageResponse {
     }
 }
 
-/// A pinhole camera. `up` is not parallel to `look_at - position`, which is not zero.
+/// The camera: where it stands and looks, how film positions become rays ([`Projection`],
+/// [`ThinLens`]), the full film's size, and the part of the film that is rendered and written
+/// ([`CropWindow`]). `up` is not parallel to `look_at - position`, which is not zero.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     pub position: Vec3,
     pub look_at: Vec3,
     pub up: Vec3,
-    /// Full vertical field of view, in (0, 180).
-    pub fov_y_degrees: f32,
+    pub projection: Projection,
+    /// Depth of field (perspective and orthographic; radius 0 is a pinhole).
+    pub lens: ThinLens,
+    /// The full film, in pixels: the projection spans it whatever the crop.
     pub width: u32,
     pub height: u32,
     /// Which way the image's x axis runs.
     pub handedness: Handedness,
+    pub crop: CropWindow,
+}
+
+impl Camera {
+    /// The full vertical field of view of a perspective camera.
+    pub fn fov_y_degrees(&self) -> Option<f32> {
+        match self.projection {
+            Projection::Perspective { fov_y_degrees } => Some(fov_y_degrees),
+            _ => None,
+        }
+    }
+
+    /// The film pixels rendered and written: [`CropWindow::pixels`] of this film.
+    pub fn crop_pixels(&self) -> [u32; 4] {
+        self.crop.pixels(self.width, self.height)
+    }
+
+    /// The written image's size in pixels (the crop's; zero where the crop holds no pixel).
+    pub fn image_size(&self) -> (u32, u32) {
+        let [x0, x1, y0, y1] = self.crop_pixels();
+        (x1 - x0, y1 - y0)
+    }
+}
+
+/// How the camera turns film positions into ray directions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Rays from one point; the full vertical field of view is in (0, 180) degrees.
+    Perspective { fov_y_degrees: f32 },
+    /// Parallel rays along the view direction from a film `view_height` world units tall
+    /// (> 0), as wide as the film's aspect makes it, centred on the view axis.
+    Orthographic { view_height: f32 },
+    /// pbrt-v3's lat-long camera: the film covers the whole sphere, θ from the top of the
+    /// image (θ = 0 along `up`) and φ from its left edge, the direction in camera space
+    /// (x right, y up, z forward) being (sin θ cos φ, cos θ, sin θ sin φ).
+    Environment,
+}
+
+/// A thin lens of `radius` (>= 0; 0 is a pinhole) focused on the plane `focal_distance` (> 0)
+/// ahead along the view direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThinLens {
+    pub radius: f32,
+    pub focal_distance: f32,
+}
+
+impl ThinLens {
+    /// pbrt's defaults: a pinhole, focused at 10⁶.
+    pub const PINHOLE: ThinLens = ThinLens {
+        radius: 0.0,
+        focal_distance: 1e6,
+    };
+}
+
+impl Default for ThinLens {
+    fn default() -> Self {
+        Self::PINHOLE
+    }
+}
+
+/// The part of the film rendered, as fractions of its width (`x`, from the left) and height
+/// (`y`, from the top), each pair ordered, within [0, 1] and holding at least one pixel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CropWindow {
+    pub x: [f32; 2],
+    pub y: [f32; 2],
+}
+
+impl CropWindow {
+    pub const FULL: CropWindow = CropWindow {
+        x: [0.0, 1.0],
+        y: [0.0, 1.0],
+    };
+
+    /// The pixels of a `width` × `height` film inside the window, `[x0, x1) × [y0, y1)` as
+    /// `[x0, x1, y0, y1]`, rounded as pbrt rounds them: each edge at the first pixel whose
+    /// left (top) side is at or past the window's, the product taken in f32 as pbrt takes it
+    /// (0.2 of 30 pixels is pixel 6, not the 7 that 0.2's f32 value times 30 exactly gives).
+    pub fn pixels(&self, width: u32, height: u32) -> [u32; 4] {
+        let edge =
+            |fraction: f32, pixels: u32| ((fraction * pixels as f32).ceil() as u32).min(pixels);
+        let [x0, x1] = self.x.map(|f| edge(f, width));
+        let [y0, y1] = self.y.map(|f| edge(f, height));
+        [x0, x1.max(x0), y0, y1.max(y0)]
+    }
+}
+
+impl Default for CropWindow {
+    fn default() -> Self {
+        Self::FULL
+    }
 }
 
 /// The image's x axis runs along `forward × up` (right-handed, dpm's TOML default) or along

@@ -7,7 +7,7 @@
 //! them to descriptions built in code (another scene format's reader). Must not know TOML,
 //! read files or report lines.
 
-use super::{Light, Material, TriangleMesh};
+use super::{CropWindow, Light, Material, TriangleMesh};
 use glam::Vec3;
 
 /// Directions closer than this (sine of the angle between them) count as parallel.
@@ -193,6 +193,60 @@ pub(crate) fn positive(field: &str, x: f32) -> Checked<f32> {
             format!("{x} must be a finite number greater than 0"),
         ))
     }
+}
+
+/// A thin lens's radius: finite and >= 0 (0 is a pinhole).
+pub(crate) fn lens_radius(field: &str, x: f32) -> Checked<f32> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(InvalidField::new(
+            field,
+            format!("{x} is not a lens radius (a finite number >= 0; 0 is a pinhole)"),
+        ))
+    }
+}
+
+/// A crop window `[x0, x1, y0, y1]` of fractions in [0, 1], each pair put in order as pbrt
+/// does, spanning some width and height.
+pub(crate) fn crop_window(field: &str, [x0, x1, y0, y1]: [f32; 4]) -> Checked<CropWindow> {
+    if let Some(x) = [x0, x1, y0, y1]
+        .into_iter()
+        .find(|x| !(0.0..=1.0).contains(x))
+    {
+        return Err(InvalidField::new(
+            field,
+            format!("{x} is not a fraction of the film in [0, 1]"),
+        ));
+    }
+    let (x, y) = ([x0.min(x1), x0.max(x1)], [y0.min(y1), y0.max(y1)]);
+    if x[0] == x[1] || y[0] == y[1] {
+        return Err(InvalidField::new(
+            field,
+            format!("[{x0}, {x1}, {y0}, {y1}] is empty (x0 = x1 or y0 = y1)"),
+        ));
+    }
+    Ok(CropWindow { x, y })
+}
+
+/// A crop window that holds at least one pixel of a `width` × `height` film.
+pub(crate) fn crop_holds_pixels(
+    field: &str,
+    crop: &CropWindow,
+    width: u32,
+    height: u32,
+) -> Checked<()> {
+    let [x0, x1, y0, y1] = crop.pixels(width, height);
+    if x0 < x1 && y0 < y1 {
+        return Ok(());
+    }
+    Err(InvalidField::new(
+        field,
+        format!(
+            "[{}, {}, {}, {}] holds no whole pixel of the {width} × {height} film",
+            crop.x[0], crop.x[1], crop.y[0], crop.y[1]
+        ),
+    ))
 }
 
 /// A light's flux, irradiance or radiance in `unit` per channel: finite, >= 0, not all zero.

@@ -7,12 +7,15 @@
 
 use super::document::{Document, child_path};
 use super::format::{
-    CameraSpec, DEFAULT_CONE_DELTA, LightSpec, MaterialSpec, MeshLightSpec, MeshSpec, QuadSpec,
-    Scale, SphereSpec,
+    CameraSpec, DEFAULT_CONE_DELTA, LightSpec, MaterialSpec, MeshLightSpec, MeshSpec,
+    ProjectionSpec, QuadSpec, Scale, SphereSpec,
 };
 use super::rules::{self, InvalidField, PARALLEL_SINE, check_light, check_material};
 use super::transform::Transform;
-use super::{Camera, Light, Material, SceneError, Shape, SpotFalloff, TriangleMesh};
+use super::{
+    Camera, CropWindow, Light, Material, Projection, SceneError, Shape, SpotFalloff, ThinLens,
+    TriangleMesh,
+};
 use glam::Vec3;
 use std::collections::HashMap;
 
@@ -119,10 +122,6 @@ pub(crate) fn camera(doc: &Document, spec: &CameraSpec) -> Result<Camera, SceneE
             "is parallel to the view direction (look_at - position)",
         ));
     }
-    let fov = spec.fov_y;
-    if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
-        return Err(doc.error("camera.fov_y", format!("{fov} is not in (0, 180) degrees")));
-    }
     for (axis, &pixels) in spec.resolution.iter().enumerate() {
         if pixels == 0 {
             return Err(doc.error(
@@ -131,17 +130,85 @@ pub(crate) fn camera(doc: &Document, spec: &CameraSpec) -> Result<Camera, SceneE
             ));
         }
     }
-    Ok(Camera {
+    let camera = Camera {
         position,
         look_at,
         up,
-        fov_y_degrees: fov,
+        projection: projection(doc, spec)?,
+        lens: thin_lens(doc, spec)?,
         handedness: match spec.handedness {
             super::format::HandednessSpec::Right => super::Handedness::Right,
             super::format::HandednessSpec::Left => super::Handedness::Left,
         },
         width: spec.resolution[0],
         height: spec.resolution[1],
+        crop: match spec.crop_window {
+            Some(window) => rules::crop_window("crop_window", window).map_err(&at)?,
+            None => CropWindow::FULL,
+        },
+    };
+    rules::crop_holds_pixels("crop_window", &camera.crop, camera.width, camera.height)
+        .map_err(&at)?;
+    Ok(camera)
+}
+
+/// The camera's projection: `fov_y` belongs to a perspective camera, `view_height` to an
+/// orthographic one, and each needs its own.
+fn projection(doc: &Document, spec: &CameraSpec) -> Result<Projection, SceneError> {
+    let kind = spec.projection.name();
+    let given = [("fov_y", spec.fov_y), ("view_height", spec.view_height)];
+    let own = match spec.projection {
+        ProjectionSpec::Perspective => Some("fov_y"),
+        ProjectionSpec::Orthographic => Some("view_height"),
+        ProjectionSpec::Environment => None,
+    };
+    if let Some((field, _)) = given
+        .iter()
+        .find(|(field, value)| value.is_some() && Some(*field) != own)
+    {
+        return Err(doc.error(
+            &format!("camera.{field}"),
+            format!("a {kind} camera has no {field}"),
+        ));
+    }
+    let needed = |field: &str, value: Option<f32>| {
+        value.ok_or_else(|| doc.error("camera", format!("a {kind} camera needs {field}")))
+    };
+    Ok(match spec.projection {
+        ProjectionSpec::Perspective => {
+            let fov = needed("fov_y", spec.fov_y)?;
+            if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
+                return Err(doc.error("camera.fov_y", format!("{fov} is not in (0, 180) degrees")));
+            }
+            Projection::Perspective { fov_y_degrees: fov }
+        }
+        ProjectionSpec::Orthographic => {
+            let height = needed("view_height", spec.view_height)?;
+            Projection::Orthographic {
+                view_height: rules::positive("view_height", height).map_err(at(doc, "camera"))?,
+            }
+        }
+        ProjectionSpec::Environment => Projection::Environment,
+    })
+}
+
+/// The thin lens (a pinhole by default); an environment camera has none.
+fn thin_lens(doc: &Document, spec: &CameraSpec) -> Result<ThinLens, SceneError> {
+    let at = at(doc, "camera");
+    let radius = spec.lens_radius.unwrap_or(ThinLens::PINHOLE.radius);
+    let radius = rules::lens_radius("lens_radius", radius).map_err(&at)?;
+    let focal_distance = spec
+        .focal_distance
+        .map(|f| rules::positive("focal_distance", f))
+        .transpose()
+        .map_err(&at)?
+        .unwrap_or(ThinLens::PINHOLE.focal_distance);
+    if spec.projection == ProjectionSpec::Environment && radius > 0.0 {
+        return Err(doc.error("camera.lens_radius", "an environment camera has no lens"));
+    }
+    Ok(ThinLens {
+        radius,
+        focal_distance,
     })
 }
 

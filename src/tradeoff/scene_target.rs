@@ -20,7 +20,7 @@ use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, trace_map};
 use crate::render::integrator::{EstimatedMap, Indirect, Integrator};
 use crate::render::pass::shade_pass;
-use crate::render::{PassSamples, PinholeCamera};
+use crate::render::{PassSamples, RayCamera};
 use crate::scene::{self, SceneError};
 use crate::world::World;
 use indicatif::ProgressBar;
@@ -44,7 +44,7 @@ pub struct SceneTarget {
     pub path: PathBuf,
     pub world: World,
     pub seed: u64,
-    camera: PinholeCamera,
+    camera: RayCamera,
     /// The eye pass without caustics, made on first use.
     direct: OnceCell<Image>,
     reference: Option<(Vec<f64>, SceneRegions)>,
@@ -60,7 +60,7 @@ impl SceneTarget {
         if !world.has_specular() {
             return Err(SceneTargetError::NoCaustics(path.to_path_buf()));
         }
-        let camera = PinholeCamera::new(&world.description.camera);
+        let camera = RayCamera::new(&world.description.camera);
         Ok(Self {
             path: path.to_path_buf(),
             world,
@@ -72,11 +72,11 @@ impl SceneTarget {
     }
 
     pub fn width(&self) -> usize {
-        self.world.description.camera.width as usize
+        self.camera.width()
     }
 
     pub fn height(&self) -> usize {
-        self.world.description.camera.height as usize
+        self.camera.height()
     }
 
     /// A caustic map of `count` stored photons, from pass `pass`'s streams.

@@ -6,7 +6,7 @@
 use super::*;
 use dpm::estimate::Scratch;
 use dpm::image_io::Image;
-use dpm::render::PinholeCamera;
+use dpm::render::RayCamera;
 use dpm::render::integrator::{Indirect, Integrator};
 use dpm::render::pipeline;
 use dpm::sampling::{PathSampler, Rng, Stream};
@@ -241,15 +241,16 @@ pub fn check_plane_pixels(
 ) -> PlaneCheck {
     let (w, h) = (desc.camera.width, desc.camera.height);
     assert_eq!((image.width, image.height), (w as usize, h as usize));
-    let camera = PinholeCamera::new(&desc.camera);
+    let camera = RayCamera::new(&desc.camera);
     let epsilon = World::new(desc.clone()).expect("world").ray_epsilon() as f64;
     let samples = dpm::render::PassSamples::new(1, 0, 1);
     let mut check = PlaneCheck::default();
     for y in 0..h {
         for x in 0..w {
-            let o = dvec(camera.origin());
-            let (jx, jy) = samples.sample((y * w + x) as u64, 0).jitter;
-            let d = dvec(camera.direction(x as f32 + jx, y as f32 + jy));
+            let sample = samples.sample((y * w + x) as u64, 0);
+            let (jx, jy) = sample.jitter;
+            let ray = camera.ray(x as f32 + jx, y as f32 + jy, sample.lens);
+            let (o, d) = (dvec(ray.origin), dvec(ray.direction));
             let got = dvec(image.get(x as usize, y as usize));
             if let Some(shown) = in_front(o, d) {
                 check.in_front += 1;

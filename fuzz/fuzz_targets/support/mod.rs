@@ -41,7 +41,7 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
 pub fn check_scene(scene: &SceneDescription) {
     let c = &scene.camera;
     assert!(c.position.is_finite() && c.look_at.is_finite() && c.up.is_finite());
-    assert!(c.fov_y_degrees > 0.0 && c.fov_y_degrees < 180.0 && c.width > 0 && c.height > 0);
+    assert!(c.fov_y_degrees().is_none_or(|f| f > 0.0 && f < 180.0) && c.width > 0 && c.height > 0);
     assert!(!scene.lights.is_empty() && !scene.shapes.is_empty());
     for light in &scene.lights {
         assert!(check_light(light).is_ok(), "{light:?}");

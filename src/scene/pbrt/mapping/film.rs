@@ -1,4 +1,4 @@
-//! pbrt's `Film` as dpm applies it: the resolution, and what pbrt does to the written image —
+//! pbrt's `Film` as dpm applies it: the resolution, the crop window, and what pbrt does to the written image —
 //! pbrt-v3's `scale`, pbrt-v4's imaging ratio (exposure time · ISO / 100, the exposure time
 //! being the camera's shutter interval unless the film gives `exposuretime`) and its white
 //! balance (Bradford adaptation from the daylight white of `whitebalance` kelvin to D65), as
@@ -7,23 +7,24 @@
 use super::super::Dialect;
 use super::super::parser::{CameraItem, Item};
 use super::{Mapper, param_error, value_error};
-use crate::scene::{ImageResponse, SceneError};
+use crate::scene::{CropWindow, ImageResponse, SceneError, rules};
 use crate::spectrum;
 
 /// pbrt's default film size.
-const DEFAULT_RESOLUTION: [i64; 2] = [640, 480];
+const DEFAULT_RESOLUTION: [u32; 2] = [640, 480];
 /// A side longer than this is surely a typo, and its film would not fit in memory.
 const MAX_RESOLUTION: i64 = 1 << 16;
 
 impl Mapper<'_> {
-    /// The film's resolution and image response; reports the film parameters not read.
+    /// The film's settings; reports the film parameters not read.
     pub(super) fn film(
         &mut self,
         film: Option<&Item>,
         camera: Option<&CameraItem>,
-    ) -> Result<([u32; 2], ImageResponse), SceneError> {
+    ) -> Result<FilmSettings, SceneError> {
         let mut resolution = DEFAULT_RESOLUTION;
         let mut response = ImageResponse::default();
+        let mut crop = CropWindow::FULL;
         if let Some(film) = film {
             let p = |e| param_error("Film", e);
             for (axis, name) in ["xresolution", "yresolution"].into_iter().enumerate() {
@@ -36,16 +37,12 @@ impl Mapper<'_> {
                             format!("{n} is not from 1 to {MAX_RESOLUTION}"),
                         ));
                     }
-                    resolution[axis] = n;
+                    resolution[axis] = n as u32;
                 }
             }
             film.params.string("filename").map_err(p)?;
-            if film.params.at("cropwindow").is_some() {
-                self.warn(
-                    &film.at,
-                    "Film \"cropwindow\" is ignored: dpm renders the whole frame".into(),
-                );
-                film.params.floats("cropwindow").map_err(p)?;
+            if let Some(window) = film.params.floats("cropwindow").map_err(p)? {
+                crop = crop_window(film, &window, resolution)?;
             }
             response.scale = positive(film, "scale")?.unwrap_or(1.0);
             if self.dialect.0 == Dialect::V4 {
@@ -53,7 +50,11 @@ impl Mapper<'_> {
             }
             self.unused(film, "Film");
         }
-        Ok(([resolution[0] as u32, resolution[1] as u32], response))
+        Ok(FilmSettings {
+            resolution,
+            response,
+            crop,
+        })
     }
 
     /// pbrt-v4's sensor: the imaging ratio and the white balance.
@@ -95,6 +96,34 @@ impl Mapper<'_> {
         }
         Ok(())
     }
+}
+
+/// What the film gives the scene.
+pub(super) struct FilmSettings {
+    /// The full film's [width, height] in pixels.
+    pub resolution: [u32; 2],
+    pub response: ImageResponse,
+    pub crop: CropWindow,
+}
+
+/// pbrt's `cropwindow` [x0 x1 y0 y1]: fractions of the film in [0, 1] (pbrt clamps them; dpm
+/// refuses what pbrt would clamp), holding at least one pixel.
+fn crop_window(
+    film: &Item,
+    window: &[f32],
+    resolution: [u32; 2],
+) -> Result<CropWindow, SceneError> {
+    let refuse = |message: String| value_error(film, "Film", "cropwindow", message);
+    let Ok(window) = <[f32; 4]>::try_from(window) else {
+        return Err(refuse(format!(
+            "has {} values; it takes 4: x0 x1 y0 y1",
+            window.len()
+        )));
+    };
+    let crop = rules::crop_window("cropwindow", window).map_err(|e| refuse(e.message))?;
+    rules::crop_holds_pixels("cropwindow", &crop, resolution[0], resolution[1])
+        .map_err(|e| refuse(e.message))?;
+    Ok(crop)
 }
 
 /// Float `name` of `item`, refused unless positive.

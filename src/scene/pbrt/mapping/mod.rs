@@ -1,11 +1,11 @@
-//! What the parsed pbrt directives become in dpm: the film ([`film`]: resolution and what pbrt
-//! does to the written image), the camera (pbrt's `fov` is for the shorter
-//! image axis; its camera space is left-handed), the lights (pbrt gives intensity or radiance,
+//! What the parsed pbrt directives become in dpm: the film ([`film`]: resolution, crop window
+//! and what pbrt does to the written image), the camera ([`camera`]), the lights (pbrt gives intensity or radiance,
 //! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`], the tessellated ones in
 //! [`tessellated`]).
 //! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
 //! Owns the mapping; must not parse text.
 
+mod camera;
 mod environment;
 mod film;
 mod lights;
@@ -14,14 +14,13 @@ mod shapes;
 mod tessellated;
 
 use super::params::ParamError;
-use super::parser::{CameraItem, Item, Parsed};
+use super::parser::{Item, Parsed};
 use super::{Dialect, Place};
 use crate::scene::files::SceneFiles;
 use crate::scene::{
-    Camera, Handedness, Instance, LoadOptions, LoadReport, Material, Prototype, SceneDescription,
-    SceneError, validate,
+    Instance, LoadOptions, LoadReport, Material, Prototype, SceneDescription, SceneError, validate,
 };
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -78,8 +77,8 @@ pub(super) fn scene(
             .iter()
             .map(|i| format!("{i}: ignored (dpm's own settings and flags apply)")),
     );
-    let (resolution, response) = m.film(parsed.film.as_ref(), parsed.camera.as_ref())?;
-    let camera = m.camera(parsed.camera.as_ref(), resolution)?;
+    let film = m.film(parsed.film.as_ref(), parsed.camera.as_ref())?;
+    let camera = m.camera(parsed.camera.as_ref(), film.resolution, film.crop)?;
     let mut lights = Vec::new();
     for light in &parsed.lights {
         lights.push(m.light(&light.item, &light.ctm)?);
@@ -141,7 +140,7 @@ pub(super) fn scene(
         shapes,
         prototypes,
         instances,
-        response,
+        response: film.response,
     };
     let mut report = m.report;
     report
@@ -196,87 +195,6 @@ impl Mapper<'_> {
                 ),
             );
         }
-    }
-
-    fn camera(
-        &mut self,
-        camera: Option<&CameraItem>,
-        resolution: [u32; 2],
-    ) -> Result<Camera, SceneError> {
-        let [width, height] = resolution;
-        let (camera_to_world, fov) = match camera {
-            None => (Mat4::IDENTITY, 90.0),
-            Some(c) => {
-                let at = &c.item.at;
-                if c.item.kind != "perspective" {
-                    return Err(at.error(
-                        "Camera",
-                        format!(
-                            "\"{}\": dpm has a perspective pinhole camera only",
-                            c.item.kind
-                        ),
-                    ));
-                }
-                let p = |e| param_error("Camera", e);
-                let fov = c.item.params.float("fov").map_err(p)?.unwrap_or(90.0);
-                if !(fov > 0.0 && fov < 180.0) {
-                    return Err(c
-                        .item
-                        .params
-                        .error_at("fov", format!("{fov} is not in (0, 180) degrees"))
-                        .map(p)
-                        .expect("parameter exists"));
-                }
-                let lens = c.item.params.float("lensradius").map_err(p)?.unwrap_or(0.0);
-                c.item.params.float("focaldistance").map_err(p)?;
-                if lens > 0.0 {
-                    self.warn(at, format!("Camera \"lensradius\" {lens}: depth of field is not supported; rendered as a pinhole"));
-                }
-                self.unused(&c.item, "Camera");
-                (c.camera_to_world, fov)
-            }
-        };
-        // pbrt's fov spans the shorter image axis; dpm's spans the height.
-        let fov_y = if width < height {
-            let half = (fov as f64).to_radians() * 0.5;
-            (2.0 * (half.tan() * height as f64 / width as f64)
-                .atan()
-                .to_degrees()) as f32
-        } else {
-            fov
-        };
-        let position = camera_to_world.transform_point3(Vec3::ZERO);
-        let forward = camera_to_world
-            .transform_vector3(Vec3::Z)
-            .normalize_or_zero();
-        let up = camera_to_world.transform_vector3(Vec3::Y);
-        let right = camera_to_world.transform_vector3(Vec3::X);
-        let at = camera.map(|c| c.item.at.clone()).unwrap_or(Place {
-            file: PathBuf::new(),
-            line: 1,
-            column: 1,
-        });
-        if forward == Vec3::ZERO || forward.cross(up).length() < 1e-9 * up.length() {
-            return Err(at.error(
-                "Camera",
-                "the camera transform has no usable view direction and up vector",
-            ));
-        }
-        // pbrt's raster x runs along the camera's +x; dpm's along forward × up unless mirrored.
-        let handedness = if right.dot(forward.cross(up)) >= 0.0 {
-            Handedness::Right
-        } else {
-            Handedness::Left
-        };
-        Ok(Camera {
-            position,
-            look_at: (position + forward),
-            up: up.normalize(),
-            fov_y_degrees: fov_y,
-            width,
-            height,
-            handedness,
-        })
     }
 
     /// The scene material of a shape's pbrt material, mapping it on first use.
