@@ -41,6 +41,19 @@ enum Command {
     /// Render a scene's reference caustic image (many more photons, a smaller radius) to a
     /// cache file, or report the cached one when the scene and settings are unchanged.
     Reference(ReferenceArgs),
+    /// Read a scene (TOML or pbrt) without rendering: every error, warning and note it
+    /// meets, each with its file:line(:column), then what would be rendered. Exits 0 when
+    /// the scene would render, 2 otherwise.
+    Check(CheckArgs),
+}
+
+#[derive(clap::Args, Debug)]
+struct CheckArgs {
+    /// The scene file (.toml or .pbrt).
+    scene: std::path::PathBuf,
+    /// Count what `dpm render --strict` refuses (materials dpm approximates) as errors.
+    #[arg(long)]
+    strict: bool,
 }
 
 /// The parsed command line. `--version` also names the Embree library in use, which takes a
@@ -156,6 +169,18 @@ fn main() -> ExitCode {
                 ExitCode::from(e.exit_code() as u8)
             }
         },
+        Command::Check(args) => {
+            let options = dpm::scene::LoadOptions {
+                strict: args.strict,
+            };
+            let report = dpm::scene::check::check(&args.scene, &options);
+            print!("{}", report.text());
+            if report.renders() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(2)
+            }
+        }
         Command::Reference(args) => match dpm::tradeoff::reference::run(&args) {
             Ok(line) => {
                 println!("{line}");

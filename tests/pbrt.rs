@@ -170,7 +170,6 @@ const MALFORMED: &[(&str, &str, &str)] = &[
     ("unclosed-attribute-begin", "unclosed-attribute-begin.pbrt:7:1", "never closed"),
     ("unclosed-value-list", "unclosed-value-list.pbrt:8:1", "in a value list"),
     ("undefined-coordinate-system", "undefined-coordinate-system.pbrt:7:1", "\"lamp\""),
-    ("undefined-named-material", "undefined-named-material.pbrt:7:1", "\"gold\""),
     ("unknown-camera", "unknown-camera.pbrt:2:1", "\"fisheye\": dpm has the \"perspective\", \"orthographic\" and \"environment\" cameras"),
     ("unknown-directive", "unknown-directive.pbrt:7:1", "`Shap` is not a pbrt directive"),
     ("unknown-material", "unknown-material.pbrt:7:1", "\"velvet\""),

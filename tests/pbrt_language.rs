@@ -311,3 +311,62 @@ fn pbrt_v4_film_exposure_and_white_balance_become_the_image_response() {
     let err = load_text(dir.path(), &text).unwrap_err().to_string();
     assert!(err.contains("never opens"), "{err}");
 }
+
+#[test]
+fn an_undefined_named_material_keeps_the_current_one_with_a_warning() {
+    // pbrt-v3 reports it and goes on (contemporary-bathroom names materials before defining them).
+    let (scene, report) = loads(&world(
+        "Material \"matte\" \"rgb Kd\" [0.25 0.5 0.75]\nNamedMaterial \"gold\"\nShape \"sphere\"\n",
+    ));
+    assert!(
+        report
+            .warnings
+            .iter()
+            .any(|w| w.contains("\"gold\"") && w.contains(":7:1")),
+        "{:?}",
+        report.warnings
+    );
+    let scene::Shape::Sphere { material, .. } = scene.shapes[0] else {
+        panic!("{:?}", scene.shapes)
+    };
+    assert_eq!(
+        scene.materials[material as usize],
+        Material::Diffuse {
+            albedo: Vec3::new(0.25, 0.5, 0.75)
+        }
+    );
+}
+
+#[test]
+fn a_metal_from_sampled_spectrum_files_reflects_its_fresnel_colour() {
+    // η = 1.5 and k = 0 at every wavelength: F0 = (0.5/2.5)² = 0.04 in every channel; an η
+    // rising across the spectrum makes a redder F0 than a bluer one.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("eta.spd"), "# flat\n300 1.5\n800 1.5\n").unwrap();
+    std::fs::write(dir.path().join("k.spd"), "300 0\n800 0\n").unwrap();
+    std::fs::write(dir.path().join("rising.spd"), "380 1.2\n780 3.0\n").unwrap();
+    let metal = |eta: &str| {
+        world(&format!(
+            "Material \"metal\" \"spectrum eta\" \"{eta}\" \"spectrum k\" \"k.spd\" \"float roughness\" 0\nShape \"sphere\"\n"
+        ))
+    };
+    let tint = |eta: &str| {
+        let (scene, _) = load_text(dir.path(), &metal(eta)).unwrap_or_else(|e| panic!("{e}"));
+        match scene.materials[..] {
+            [.., Material::Mirror { tint }] => tint,
+            ref other => panic!("{other:?}"),
+        }
+    };
+    let flat = tint("eta.spd");
+    assert!(
+        (flat - Vec3::splat(0.04)).abs().max_element() < 1e-4,
+        "{flat}"
+    );
+    let rising = tint("rising.spd");
+    assert!(rising.x > rising.z, "{rising}");
+    let e = load_text(dir.path(), &metal("absent.spd")).unwrap_err();
+    assert!(
+        e.to_string().contains("absent.spd") && e.line.is_some(),
+        "{e}"
+    );
+}

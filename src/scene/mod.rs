@@ -12,6 +12,7 @@
 //! OBJ/MTL files, `transform` places meshes in the world, `tessellate` turns curved and
 //! subdivision surfaces into triangles in their own space.
 
+pub mod check;
 mod document;
 pub mod environment;
 pub mod files;

@@ -311,9 +311,10 @@ impl Parser<'_> {
                 let name = args.string("name")?;
                 match self.named_materials.get(&name) {
                     Some(&i) => self.state.material = Some(i),
-                    None => {
-                        return Err(place.error("NamedMaterial", format!("no material is named \"{name}\" (MakeNamedMaterial must come first)")));
-                    }
+                    // pbrt-v3 reports it and goes on with the current material.
+                    None => self.out.warnings.push(format!(
+                        "{place}: NamedMaterial: no material is named \"{name}\" yet (MakeNamedMaterial must come first): the shapes that follow keep the current material, as pbrt does"
+                    )),
                 }
             }
             "Texture" => {

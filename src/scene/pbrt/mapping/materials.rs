@@ -216,6 +216,20 @@ impl Mapper<'_> {
         }
         let named = |param: &str| params.spectrum_name(param);
         let (eta_name, k_name) = (named("eta"), named("k"));
+        let is_file = |n: &Option<String>| n.as_ref().is_some_and(|n| n.ends_with(".spd"));
+        if is_file(&eta_name) || is_file(&k_name) {
+            // Sampled spectra from files: each to RGB through the CIE 1931 functions, as pbrt-v3
+            // turns them into RGB, then F0 per channel.
+            let rgb = |name: &Option<String>, default: f32| -> Result<Vec3, SceneError> {
+                match name {
+                    Some(file) => self.spectrum_file_rgb(file, at),
+                    None => Ok(Vec3::splat(default)),
+                }
+            };
+            let (eta, k) = (rgb(&eta_name, 1.0)?, rgb(&k_name, 0.0)?);
+            let one = Vec3::ONE;
+            return Ok(((eta - one) * (eta - one) + k * k) / ((eta + one) * (eta + one) + k * k));
+        }
         if eta_name.is_some() || k_name.is_some() {
             let name = eta_name.or(k_name).unwrap_or_default();
             let metal = name
@@ -244,6 +258,57 @@ impl Mapper<'_> {
                 ((eta - one) * (eta - one) + k * k) / ((eta + one) * (eta + one) + k * k)
             }
         })
+    }
+}
+
+impl Mapper<'_> {
+    /// A pbrt `.spd` file (wavelength in nm and value, a pair a line, `#` comments) as linear
+    /// sRGB: linear between samples, held past the ends.
+    fn spectrum_file_rgb(&self, file: &str, at: &Place) -> Result<Vec3, SceneError> {
+        let path = super::super::parser::Parser::resolve(&self.folder, file);
+        let refuse = |m: String| {
+            at.error(
+                "Material \"spectrum\"",
+                format!("`{}`: {m}", path.display()),
+            )
+        };
+        let bytes = self
+            .files
+            .read(&path)
+            .map_err(|e| refuse(format!("cannot read it: {e}")))?;
+        let text = String::from_utf8_lossy(&bytes);
+        let numbers: Vec<f64> = (text.lines())
+            .map(|l| l.split('#').next().unwrap_or(""))
+            .flat_map(str::split_whitespace)
+            .map(|w| {
+                w.parse::<f64>()
+                    .map_err(|_| refuse(format!("`{w}` is not a number")))
+            })
+            .collect::<Result<_, _>>()?;
+        if numbers.len() < 2 || numbers.len() % 2 != 0 || numbers.iter().any(|x| !x.is_finite()) {
+            return Err(refuse(
+                "is not (wavelength, value) pairs of finite numbers".into(),
+            ));
+        }
+        let samples: Vec<(f64, f64)> = numbers.chunks_exact(2).map(|p| (p[0], p[1])).collect();
+        if samples.windows(2).any(|w| w[1].0 <= w[0].0) {
+            return Err(refuse("its wavelengths do not increase".into()));
+        }
+        let value = |lambda: f64| {
+            let i = samples.partition_point(|s| s.0 < lambda);
+            match i {
+                0 => samples[0].1,
+                i if i == samples.len() => samples[i - 1].1,
+                i => {
+                    let (a, b) = (samples[i - 1], samples[i]);
+                    a.1 + (b.1 - a.1) * (lambda - a.0) / (b.0 - a.0)
+                }
+            }
+        };
+        // Normalised so that a constant spectrum gives its value in every channel.
+        let white = crate::spectrum::xyz_to_linear_srgb(crate::spectrum::spectrum_xyz(|_| 1.0));
+        let rgb = crate::spectrum::xyz_to_linear_srgb(crate::spectrum::spectrum_xyz(value)) / white;
+        Ok(rgb.as_vec3())
     }
 }
 
