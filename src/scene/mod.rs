@@ -21,13 +21,15 @@ mod pbrt;
 pub mod ply;
 mod rules;
 pub(crate) mod tessellate;
+pub mod texture;
 pub(crate) mod transform;
 mod validate;
 
 pub use environment::{EnvironmentMap, SphereMapping};
 pub use rules::{InvalidField, check_light, check_material, check_mesh};
+pub use texture::{Texture, TexturedMaterial, TexturedParameter};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -39,6 +41,9 @@ pub struct SceneDescription {
     /// Scene materials in name order, then materials taken from MTL files in order of first use.
     pub materials: Vec<Material>,
     pub shapes: Vec<Shape>,
+    /// The materials some of whose parameters are textures, each once; empty in a scene
+    /// without textures (which renders exactly as before textures existed).
+    pub textured_materials: Vec<TexturedMaterial>,
     /// What the written image's pixels are multiplied by (pbrt's film settings; the TOML
     /// format leaves every image as rendered).
     pub response: ImageResponse,
@@ -205,7 +210,7 @@ impl SpotFalloff {
 }
 
 /// A material. Every albedo and tint channel lies in [0, 1] ([`check_material`]).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
     /// Lambertian reflector.
     Diffuse { albedo: Vec3 },
@@ -245,13 +250,15 @@ pub enum Shape {
     Triangles(TriangleMesh),
 }
 
-/// World-space triangles with one material; `normals`, when present, are per vertex and unit.
-/// Triangles are wound counter-clockwise seen from the side their geometric normal points to;
-/// none has zero area.
+/// World-space triangles with one material; `normals`, when present, are per vertex and unit;
+/// `uvs`, when present, are per-vertex texture coordinates (without them a triangle's corners
+/// take pbrt's (0, 0), (1, 0), (1, 1)). Triangles are wound counter-clockwise seen from the
+/// side their geometric normal points to; none has zero area.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
     pub triangles: Vec<[u32; 3]>,
     /// Indexes [`SceneDescription::materials`].
     pub material: u32,
@@ -435,6 +442,7 @@ pub fn parse_with(
         lights,
         materials: materials.into_materials(),
         shapes,
+        textured_materials: Vec::new(),
         response: ImageResponse::default(),
     };
     report

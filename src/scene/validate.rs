@@ -13,7 +13,7 @@ use super::format::{
 use super::rules::{self, InvalidField, PARALLEL_SINE, check_light, check_material};
 use super::transform::Transform;
 use super::{Camera, Light, Material, SceneError, Shape, SpotFalloff, TriangleMesh};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 
 /// The names of [`SpotFalloff`]s in the scene file.
@@ -294,6 +294,8 @@ pub(crate) fn quad(
             corner + edge_v,
         ],
         normals: None,
+        // (u, v) run along edge_u and edge_v from the corner.
+        uvs: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         material,
     }))

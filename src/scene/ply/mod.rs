@@ -1,5 +1,6 @@
 //! PLY meshes (ASCII, binary little- and big-endian): vertex positions, optional vertex
-//! normals, and faces of three or four corners (quads split in two). Owns the file format and
+//! normals and texture coordinates (`u, v`, `s, t`, `texture_u, texture_v` or
+//! `texture_s, texture_t`), and faces of three or four corners (quads split in two). Owns the file format and
 //! its errors; the caller places the mesh in the world. A count in the header is checked
 //! against the bytes (or lines) the file really has before anything is allocated for it, so a
 //! header that claims 10¹² vertices is refused, not obeyed. Must not know scenes or Embree.
@@ -8,7 +9,7 @@ mod body;
 
 use super::files::SceneFiles;
 use body::{AsciiBody, Body, element_error};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 /// A mesh as the file gives it, in the file's own coordinates.
@@ -16,6 +17,7 @@ use std::path::Path;
 pub struct PlyMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -323,8 +325,23 @@ fn header(bytes: &[u8]) -> Result<(Encoding, Vec<Element>, usize, usize), PlyErr
     Ok((encoding, elements, at, line_no))
 }
 
-/// The position (x, y, z) and normal (nx, ny, nz) properties of `vertex`, by index.
-fn vertex_layout(element: &Element) -> Result<([usize; 3], Option<[usize; 3]>), PlyError> {
+/// Where `vertex` keeps a position (x, y, z), a normal (nx, ny, nz) and texture coordinates,
+/// by property index.
+struct VertexLayout {
+    position: [usize; 3],
+    normal: Option<[usize; 3]>,
+    uv: Option<[usize; 2]>,
+}
+
+/// The names texture coordinates go by in PLY files, in the order they are looked for.
+const UV_NAMES: [[&str; 2]; 4] = [
+    ["u", "v"],
+    ["s", "t"],
+    ["texture_u", "texture_v"],
+    ["texture_s", "texture_t"],
+];
+
+fn vertex_layout(element: &Element) -> Result<VertexLayout, PlyError> {
     let index = |name: &str| {
         element
             .properties
@@ -350,7 +367,15 @@ fn vertex_layout(element: &Element) -> Result<([usize; 3], Option<[usize; 3]>), 
             ));
         }
     };
-    Ok(([x, y, z], normal))
+    let uv = UV_NAMES.iter().find_map(|names| match names.map(index) {
+        [Some(a), Some(b)] => Some([a, b]),
+        _ => None,
+    });
+    Ok(VertexLayout {
+        position: [x, y, z],
+        normal,
+        uv,
+    })
 }
 
 fn read_vertices(reader: &mut Body, element: &Element, mesh: &mut PlyMesh) -> Result<(), PlyError> {
@@ -361,9 +386,14 @@ fn read_vertices(reader: &mut Body, element: &Element, mesh: &mut PlyMesh) -> Re
             "has more vertices than u32 indices can name",
         ));
     }
-    let (position, normal) = vertex_layout(element)?;
+    let VertexLayout {
+        position,
+        normal,
+        uv,
+    } = vertex_layout(element)?;
     mesh.positions.reserve(element.count);
     let mut normals = normal.map(|_| Vec::with_capacity(element.count));
+    let mut uvs = uv.map(|_| Vec::with_capacity(element.count));
     let mut values = vec![0.0f64; element.properties.len()];
     for i in 0..element.count {
         reader.begin("vertex", i)?;
@@ -388,8 +418,21 @@ fn read_vertices(reader: &mut Body, element: &Element, mesh: &mut PlyMesh) -> Re
             }
             normals.push(n);
         }
+        if let (Some(uvs), Some([a, b])) = (uvs.as_mut(), uv) {
+            let t = Vec2::new(values[a] as f32, values[b] as f32);
+            if !t.is_finite() {
+                return Err(element_error(
+                    reader,
+                    "vertex",
+                    i,
+                    "texture coordinate is not finite",
+                ));
+            }
+            uvs.push(t);
+        }
     }
     mesh.normals = normals;
+    mesh.uvs = uvs;
     Ok(())
 }
 

@@ -12,13 +12,15 @@ mod lights;
 mod materials;
 mod shapes;
 mod tessellated;
+mod textures;
 
 use super::params::ParamError;
 use super::parser::{CameraItem, Item, Parsed};
 use super::{Dialect, Place};
 use crate::scene::files::SceneFiles;
 use crate::scene::{
-    Camera, Handedness, LoadOptions, LoadReport, Material, SceneDescription, SceneError, validate,
+    Camera, Handedness, LoadOptions, LoadReport, Material, SceneDescription, SceneError, Texture,
+    TexturedMaterial, validate,
 };
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
@@ -34,6 +36,10 @@ pub(super) struct Mapper<'f> {
     /// Scene material index of each parsed material definition (`usize::MAX`: pbrt's
     /// default), filled on first use.
     material_index: HashMap<usize, u32>,
+    /// The named textures defined so far, with what they give.
+    textures: HashMap<String, (textures::TextureType, Texture)>,
+    /// The materials mapped so far that have textured parameters.
+    textured_materials: Vec<TexturedMaterial>,
 }
 
 /// A parameter's error, placed where the parameter was written (after an `Include`, maybe
@@ -62,6 +68,8 @@ pub(super) fn scene(
         report: LoadReport::default(),
         materials: Vec::new(),
         material_index: HashMap::new(),
+        textures: HashMap::new(),
+        textured_materials: Vec::new(),
     };
     m.report.warnings.extend(parsed.warnings.iter().cloned());
     let version = match m.dialect.0 {
@@ -77,6 +85,7 @@ pub(super) fn scene(
             .iter()
             .map(|i| format!("{i}: ignored (dpm's own settings and flags apply)")),
     );
+    m.define_textures(&parsed.textures)?;
     let (resolution, response) = m.film(parsed.film.as_ref(), parsed.camera.as_ref())?;
     let camera = m.camera(parsed.camera.as_ref(), resolution)?;
     let mut lights = Vec::new();
@@ -119,6 +128,7 @@ pub(super) fn scene(
         lights,
         materials: m.materials,
         shapes,
+        textured_materials: m.textured_materials,
         response,
     };
     let mut report = m.report;
@@ -236,6 +246,7 @@ impl Mapper<'_> {
         if let Some(&i) = self.material_index.get(&key) {
             return Ok(i);
         }
+        let index = self.materials.len() as u32;
         let material = match which {
             None => Material::Diffuse {
                 albedo: Vec3::splat(0.5),
@@ -263,10 +274,15 @@ impl Mapper<'_> {
                 }
                 crate::scene::check_material(&mapped.material)
                     .map_err(|why| item.at.error("Material", format!("{label}: {why}")))?;
+                if !mapped.textures.is_empty() {
+                    self.textured_materials.push(TexturedMaterial {
+                        material: index,
+                        textures: mapped.textures,
+                    });
+                }
                 mapped.material
             }
         };
-        let index = self.materials.len() as u32;
         self.materials.push(material);
         self.material_index.insert(key, index);
         Ok(index)
