@@ -22,6 +22,7 @@ pub mod ply;
 mod rules;
 pub(crate) mod tessellate;
 pub mod texture;
+mod toml_texture;
 pub(crate) mod transform;
 mod validate;
 
@@ -402,10 +403,21 @@ pub fn parse_with(
         });
     }
     let mut materials = validate::MaterialTable::default();
+    let mut textured_materials = Vec::new();
+    let images = toml_texture::ImageSource {
+        folder: &scene_folder,
+        files,
+    };
     for (name, material) in &spec.materials {
         let path = document::child_path("materials", name);
-        let material = validate::material(&doc, &path, material)?;
-        materials.add_named(name, material);
+        let (material, textures) = validate::material(&doc, &path, material, &images)?;
+        let index = materials.add_named(name, material);
+        if !textures.is_empty() {
+            textured_materials.push(TexturedMaterial {
+                material: index,
+                textures,
+            });
+        }
     }
 
     let mut shapes = Vec::new();
@@ -442,7 +454,7 @@ pub fn parse_with(
         lights,
         materials: materials.into_materials(),
         shapes,
-        textured_materials: Vec::new(),
+        textured_materials,
         response: ImageResponse::default(),
     };
     report

@@ -102,6 +102,18 @@ impl TextureImage {
             + fx * fy * t(1, 1)
     }
 
+    /// Refuses texels that are not finite numbers (a float file may hold them).
+    pub fn check_finite(&self) -> Result<(), String> {
+        match self.texels.iter().position(|t| !t.is_finite()) {
+            None => Ok(()),
+            Some(i) => Err(format!(
+                "texel ({}, {}) is not finite",
+                i % self.width.max(1),
+                i / self.width.max(1)
+            )),
+        }
+    }
+
     /// The texels' mean.
     pub fn mean(&self) -> Vec3 {
         let sum: glam::DVec3 = self.texels.iter().map(|t| t.as_dvec3()).sum();

@@ -104,14 +104,14 @@ fn checkerboard_alternates_and_its_mean_is_the_squares_mean() {
     // Negative coordinates keep alternating (⌊−0.1⌋ = −1).
     assert_eq!(board.evaluate(Vec2::new(-0.01, 0.01)), b);
     let n = 400;
-    let mut sum = Vec3::ZERO;
+    let mut sum = glam::DVec3::ZERO;
     for i in 0..n {
         for j in 0..n {
             let uv = (Vec2::new(i as f32, j as f32) + 0.5) / n as f32;
-            sum += board.evaluate(uv);
+            sum += board.evaluate(uv).as_dvec3();
         }
     }
-    let mean = sum / (n * n) as f32;
+    let mean = (sum / (n * n) as f64).as_vec3();
     assert!((mean - 0.5 * (a + b)).abs().max_element() < 1e-4, "{mean}");
     assert_eq!(board.typical(), 0.5 * (a + b));
 }

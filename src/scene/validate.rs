@@ -7,12 +7,16 @@
 
 use super::document::{Document, child_path};
 use super::format::{
-    CameraSpec, DEFAULT_CONE_DELTA, LightSpec, MaterialSpec, MeshLightSpec, MeshSpec, QuadSpec,
-    Scale, SphereSpec,
+    CameraSpec, ColourSpec, DEFAULT_CONE_DELTA, LightSpec, MaterialSpec, MeshLightSpec, MeshSpec,
+    QuadSpec, Scale, SphereSpec,
 };
 use super::rules::{self, InvalidField, PARALLEL_SINE, check_light, check_material};
+use super::toml_texture::{self, ImageSource};
 use super::transform::Transform;
-use super::{Camera, Light, Material, SceneError, Shape, SpotFalloff, TriangleMesh};
+use super::{
+    Camera, Light, Material, SceneError, Shape, SpotFalloff, Texture, TexturedParameter,
+    TriangleMesh,
+};
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 
@@ -243,23 +247,43 @@ pub(crate) fn material(
     doc: &Document,
     path: &str,
     spec: &MaterialSpec,
-) -> Result<Material, SceneError> {
-    let rgb_or_one = |rgb: Option<[f32; 3]>| rgb.map_or(Vec3::ONE, Vec3::from_array);
+    images: &ImageSource,
+) -> Result<(Material, Vec<(TexturedParameter, Texture)>), SceneError> {
+    let mut textures = Vec::new();
+    let mut colour = |field: &str,
+                      given: Option<&ColourSpec>,
+                      parameter: TexturedParameter|
+     -> Result<Vec3, SceneError> {
+        let Some(given) = given else {
+            return Ok(Vec3::ONE);
+        };
+        let (value, texture) = toml_texture::colour(doc, &child_path(path, field), given, images)?;
+        textures.extend(texture.map(|t| (parameter, t)));
+        Ok(value)
+    };
     let material = match spec {
         MaterialSpec::Diffuse(diffuse) => Material::Diffuse {
-            albedo: Vec3::from_array(diffuse.albedo),
+            albedo: colour("albedo", Some(&diffuse.albedo), TexturedParameter::Albedo)?,
         },
         MaterialSpec::Mirror(mirror) => Material::Mirror {
-            tint: rgb_or_one(mirror.tint),
+            tint: colour("tint", mirror.tint.as_ref(), TexturedParameter::Tint)?,
         },
         MaterialSpec::Glass(glass) => Material::Glass {
             ior: glass.ior,
-            reflect_tint: rgb_or_one(glass.reflect_tint),
-            transmit_tint: rgb_or_one(glass.transmit_tint),
+            reflect_tint: colour(
+                "reflect_tint",
+                glass.reflect_tint.as_ref(),
+                TexturedParameter::ReflectTint,
+            )?,
+            transmit_tint: colour(
+                "transmit_tint",
+                glass.transmit_tint.as_ref(),
+                TexturedParameter::TransmitTint,
+            )?,
         },
     };
     check_material(&material).map_err(at(doc, path))?;
-    Ok(material)
+    Ok((material, textures))
 }
 
 pub(crate) fn sphere(

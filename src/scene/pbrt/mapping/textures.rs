@@ -203,14 +203,6 @@ impl Mapper<'_> {
             }
             None => params.bool("gamma").map_err(p)?.unwrap_or(eight_bit),
         };
-        let raw = self.read_image(item, "Texture", "filename", &file, false)?;
-        let decode = |v: f32| if gamma { srgb_to_linear(v) } else { v };
-        let texels = match ty {
-            TextureType::Colour => raw.pixels.iter().map(|t| t.map(decode)).collect(),
-            TextureType::Float => (raw.pixels.iter())
-                .map(|t| Vec3::splat(decode(t.dot(LUMINANCE))))
-                .collect(),
-        };
         let wrap_name = params.string("wrap").map_err(p)?;
         let wrap = match wrap_name.as_deref() {
             None => Wrap::Repeat,
@@ -229,13 +221,30 @@ impl Mapper<'_> {
         for ignored in ["filter", "maxanisotropy", "trilinear"] {
             params.mark_used(ignored);
         }
+        let mapping = uv_mapping(item)?;
+        let raw = self.read_image(item, "Texture", "filename", &file, false)?;
+        if let Some(i) = raw.pixels.iter().position(|t| !t.is_finite()) {
+            return Err(value_error(
+                item,
+                "Texture",
+                "filename",
+                format!("`{file}`: texel {i} is not finite"),
+            ));
+        }
+        let decode = |v: f32| if gamma { srgb_to_linear(v) } else { v };
+        let texels = match ty {
+            TextureType::Colour => raw.pixels.iter().map(|t| t.map(decode)).collect(),
+            TextureType::Float => (raw.pixels.iter())
+                .map(|t| Vec3::splat(decode(t.dot(LUMINANCE))))
+                .collect(),
+        };
         Ok(Texture::Image {
             image: Arc::new(TextureImage {
                 width: raw.width,
                 height: raw.height,
                 texels,
             }),
-            mapping: uv_mapping(item)?,
+            mapping,
             wrap,
             scale,
             invert,
