@@ -336,3 +336,24 @@ fn an_untextured_scene_has_no_textured_materials() {
         }
     );
 }
+
+#[test]
+fn the_image_fuzz_seeds_decode() {
+    use dpm::image_io::{SceneImageFormat, decode_linear};
+    let formats = [
+        SceneImageFormat::Exr,
+        SceneImageFormat::Pfm,
+        SceneImageFormat::Png,
+        SceneImageFormat::Tga,
+    ];
+    let dir = support::repo_path("fuzz/corpus/image");
+    let mut seeds = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let bytes = std::fs::read(entry.unwrap().path()).unwrap();
+        let format = formats[usize::from(bytes[0] & 3)];
+        let image = decode_linear(&bytes[1..], format, bytes[0] & 4 != 0).unwrap();
+        assert_eq!((image.width, image.height), (2, 2));
+        seeds += 1;
+    }
+    assert!(seeds >= 3);
+}
