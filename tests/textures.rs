@@ -292,12 +292,27 @@ fn malformed_textures_are_refused_naming_file_line_and_column() {
             "wrap",
         ),
     ] {
-        let text = pbrt_world(&format!("{body}Shape \"sphere\"\n"));
+        // Every texture is used: an unused one that cannot be read is no error (see below).
+        let used = if body.contains("Material") {
+            ""
+        } else {
+            "Material \"matte\" \"texture Kd\" \"t\"\n"
+        };
+        let text = pbrt_world(&format!("{body}{used}Shape \"sphere\"\n"));
         let err = load_text(dir.path(), &text).unwrap_err();
         assert!(err.message.contains(needle), "{body}: {err}");
         assert!(err.line.is_some() && err.column.is_some(), "{body}: {err}");
         assert!(err.to_string().contains("scene.pbrt:"), "{body}: {err}");
     }
+    // A texture only a bump map uses (dpm ignores bump maps) may be one dpm cannot read.
+    let bump = pbrt_world(
+        "Texture \"b\" \"float\" \"fbm\"\nMaterial \"matte\" \"texture bumpmap\" \"b\"\nShape \"sphere\"\n",
+    );
+    let (_, report) = load_text(dir.path(), &bump).unwrap();
+    assert!(
+        report.warnings.iter().any(|w| w.contains("bumpmap")),
+        "{report:?}"
+    );
     // The same through `dpm render`: exit status 2 and the place in the message.
     let text = pbrt_world("Material \"matte\" \"texture Kd\" \"nowhere\"\nShape \"sphere\"\n");
     let scene = support::write_scene(dir.path(), "cli.pbrt", &text);

@@ -36,8 +36,8 @@ pub(super) struct Mapper<'f> {
     /// Scene material index of each parsed material definition (`usize::MAX`: pbrt's
     /// default), filled on first use.
     material_index: HashMap<usize, u32>,
-    /// The named textures defined so far, with what they give.
-    textures: HashMap<String, (textures::TextureType, Texture)>,
+    /// The named textures defined so far, with what they give, or why they cannot be used.
+    textures: HashMap<String, (textures::TextureType, Result<Texture, SceneError>)>,
     /// The materials mapped so far that have textured parameters.
     textured_materials: Vec<TexturedMaterial>,
 }

@@ -33,7 +33,9 @@ impl TextureType {
 }
 
 impl Mapper<'_> {
-    /// Maps every `Texture` directive in order, so each may use the ones before it.
+    /// Maps every `Texture` directive in order, so each may use the ones before it. A texture
+    /// that cannot be mapped (an unsupported class, a missing image) is an error only where a
+    /// parameter dpm reads uses it: scenes define textures for bump maps dpm ignores.
     pub(super) fn define_textures(&mut self, textures: &[TextureItem]) -> Result<(), SceneError> {
         for t in textures {
             let ty = match t.ty.as_str() {
@@ -46,8 +48,10 @@ impl Mapper<'_> {
                     ));
                 }
             };
-            let texture = self.texture(ty, &t.item)?;
-            self.unused(&t.item, "Texture");
+            let texture = self.texture(ty, &t.item);
+            if texture.is_ok() {
+                self.unused(&t.item, "Texture");
+            }
             if self
                 .textures
                 .insert(t.name.clone(), (ty, texture))
@@ -161,7 +165,8 @@ impl Mapper<'_> {
                     .expect("the parameter was just read"))
             };
             return match self.textures.get(&texture_name) {
-                Some((found, texture)) if *found == ty => Ok(Some(texture.clone())),
+                Some((found, Ok(texture))) if *found == ty => Ok(Some(texture.clone())),
+                Some((found, Err(why))) if *found == ty => Err(why.clone()),
                 Some((found, _)) => Err(refuse(format!(
                     "texture \"{texture_name}\" is a {} texture; this parameter needs a {} texture",
                     found.name(),
