@@ -13,7 +13,7 @@ cd "$(dirname "$0")/../fuzz"
 seconds=${1:-30}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(ply pbrt scene_toml obj photon_map film)
+[ ${#targets[@]} -gt 0 ] || targets=(ply pbrt scene_toml obj photon_map film image)
 
 if ! cargo fuzz --version >/dev/null 2>&1; then
   cargo install cargo-fuzz --locked --version 0.13.2

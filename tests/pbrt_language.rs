@@ -93,7 +93,12 @@ fn a_parameter_given_twice_keeps_its_last_value_and_warns_naming_both_places() {
         "Material \"matte\" \"texture Kd\" \"checks\" \"rgb Kd\" [0.5 0.5 0.5]\nShape \"sphere\"\n",
     );
     let err = load_text(dir.path(), &text).unwrap_err().to_string();
-    assert!(err.contains("textures are not supported"), "{err}");
+    assert!(err.contains("no texture is named \"checks\""), "{err}");
+    let (scene, _) = loads(&world(
+        "Texture \"checks\" \"spectrum\" \"checkerboard\"\n\
+         Material \"matte\" \"texture Kd\" \"checks\" \"rgb Kd\" [0.5 0.5 0.5]\nShape \"sphere\"\n",
+    ));
+    assert_eq!(scene.textured_materials.len(), 1);
 }
 
 #[test]

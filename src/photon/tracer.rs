@@ -546,6 +546,7 @@ fn advance(
         return false;
     }
     let hit = world.resolve(closest);
+    let material = &world.material_at(m, &hit);
     let entering = hit.entering(d);
     let (ng, ns) = hit.facing(d);
     let next = match material {

@@ -165,7 +165,7 @@ impl Integrator<'_> {
             Surface::Material(m) => m,
         };
         let (ng, ns) = hit.facing(dir);
-        match self.world.material(m) {
+        match &self.world.material_at(m, &hit) {
             Material::Diffuse { albedo } => {
                 let p = self.offset(hit.position, ng);
                 let query = Query {
@@ -270,7 +270,7 @@ impl Integrator<'_> {
                 Surface::Material(m) => m,
             };
             let (ng, ns) = hit.facing(dir);
-            let material = self.world.material(m);
+            let material = &self.world.material_at(m, &hit);
             let Some((next, tint)) = sampled_specular(material, &hit, dir, ns, rng) else {
                 return Vec3::ZERO;
             };
@@ -376,7 +376,7 @@ impl Integrator<'_> {
                 break;
             };
             let (ng, ns) = hit.facing(d);
-            let material = self.world.material(m);
+            let material = &self.world.material_at(m, &hit);
             if let Material::Diffuse { albedo } = material {
                 let q = Query {
                     position: hit.position,

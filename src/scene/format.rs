@@ -184,7 +184,7 @@ pub(crate) enum MaterialSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct DiffuseSpec {
-    pub albedo: [f32; 3],
+    pub albedo: ColourSpec,
 }
 
 #[derive(Deserialize)]
@@ -192,7 +192,7 @@ pub(crate) struct DiffuseSpec {
 pub(crate) struct MirrorSpec {
     /// Default [1, 1, 1].
     #[serde(default)]
-    pub tint: Option<[f32; 3]>,
+    pub tint: Option<ColourSpec>,
 }
 
 #[derive(Deserialize)]
@@ -201,10 +201,48 @@ pub(crate) struct GlassSpec {
     pub ior: f32,
     /// Default [1, 1, 1].
     #[serde(default)]
-    pub reflect_tint: Option<[f32; 3]>,
+    pub reflect_tint: Option<ColourSpec>,
     /// Default [1, 1, 1].
     #[serde(default)]
-    pub transmit_tint: Option<[f32; 3]>,
+    pub transmit_tint: Option<ColourSpec>,
+}
+
+/// A material colour: `[r, g, b]`, or a texture table (docs/scene-format.md#textures).
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(crate) enum ColourSpec {
+    Rgb([f32; 3]),
+    Texture(TextureSpec),
+}
+
+/// A texture: an `image` file or a `checkerboard` of two colours, on the surface's (u, v).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TextureSpec {
+    pub image: Option<String>,
+    pub checkerboard: Option<[[f32; 3]; 2]>,
+    /// Whether the image's values are sRGB-encoded; default: for PNG and TGA files.
+    pub srgb: Option<bool>,
+    /// `repeat` (default), `black` or `clamp`.
+    pub wrap: Option<String>,
+    #[serde(default = "unit_pair")]
+    pub uv_scale: [f32; 2],
+    #[serde(default)]
+    pub uv_offset: [f32; 2],
+    /// Multiplies the image's values.
+    #[serde(default = "one")]
+    pub scale: f32,
+    /// `1 − value` (at least 0) after the scale.
+    #[serde(default)]
+    pub invert: bool,
+}
+
+fn unit_pair() -> [f32; 2] {
+    [1.0, 1.0]
+}
+
+fn one() -> f32 {
+    1.0
 }
 
 pub(crate) enum ObjectSpec {

@@ -295,6 +295,19 @@ impl MeshGroup {
             }
             self.mesh.positions.push(world);
         }
+        // OBJ `vt`: a part without them, among parts with them, gets (0, 0) at its vertices.
+        let has_uvs = part.texcoords.len() == 2 * vertex_count && vertex_count > 0;
+        if has_uvs && self.mesh.uvs.is_none() {
+            self.mesh.uvs = Some(vec![glam::Vec2::ZERO; base as usize]);
+        }
+        if let Some(uvs) = &mut self.mesh.uvs {
+            if has_uvs {
+                let uv = part.texcoords.chunks_exact(2);
+                uvs.extend(uv.map(|t| glam::Vec2::new(t[0], t[1])));
+            } else {
+                uvs.resize(uvs.len() + vertex_count, glam::Vec2::ZERO);
+            }
+        }
         if has_normals {
             let normals = self.mesh.normals.get_or_insert_with(Vec::new);
             for n in part.normals.chunks_exact(3) {
@@ -442,13 +455,15 @@ fn mtl_line(text: &str, name: &str, keyword: &str) -> usize {
     block_line.unwrap_or(1)
 }
 
-/// Rejects non-finite vertex positions and normals, and zero normals, which tobj accepts.
+/// Rejects non-finite vertex positions, normals and texture coordinates, and zero normals,
+/// which tobj accepts.
 fn check_obj_numbers(text: &str) -> Result<(), (usize, String)> {
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
         let what = match words.next() {
             Some("v") => "vertex position",
             Some("vn") => "vertex normal",
+            Some("vt") => "texture coordinate",
             _ => continue,
         };
         // Unparsable numbers are left to tobj, which reports them.

@@ -22,13 +22,16 @@ mod pbrt;
 pub mod ply;
 mod rules;
 pub(crate) mod tessellate;
+pub mod texture;
+mod toml_texture;
 pub(crate) mod transform;
 mod validate;
 
 pub use environment::{EnvironmentMap, SphereMapping};
 pub use rules::{InvalidField, check_light, check_material, check_mesh};
+pub use texture::{Texture, TexturedMaterial, TexturedParameter};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -43,6 +46,9 @@ pub struct SceneDescription {
     /// Groups of shapes defined once and placed by [`SceneDescription::instances`].
     pub prototypes: Vec<Prototype>,
     pub instances: Vec<Instance>,
+    /// The materials some of whose parameters are textures, each once; empty in a scene
+    /// without textures (which renders exactly as before textures existed).
+    pub textured_materials: Vec<TexturedMaterial>,
     /// What the written image's pixels are multiplied by (pbrt's film settings; the TOML
     /// format leaves every image as rendered).
     pub response: ImageResponse,
@@ -304,7 +310,7 @@ impl SpotFalloff {
 }
 
 /// A material. Every albedo and tint channel lies in [0, 1] ([`check_material`]).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
     /// Lambertian reflector.
     Diffuse { albedo: Vec3 },
@@ -362,13 +368,15 @@ pub struct Instance {
     pub object_to_world: glam::Mat4,
 }
 
-/// World-space triangles with one material; `normals`, when present, are per vertex and unit.
-/// Triangles are wound counter-clockwise seen from the side their geometric normal points to;
-/// none has zero area.
+/// World-space triangles with one material; `normals`, when present, are per vertex and unit;
+/// `uvs`, when present, are per-vertex texture coordinates (without them a triangle's corners
+/// take pbrt's (0, 0), (1, 0), (1, 1)). Triangles are wound counter-clockwise seen from the
+/// side their geometric normal points to; none has zero area.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
     pub triangles: Vec<[u32; 3]>,
     /// Indexes [`SceneDescription::materials`].
     pub material: u32,
@@ -512,10 +520,21 @@ pub fn parse_with(
         });
     }
     let mut materials = validate::MaterialTable::default();
+    let mut textured_materials = Vec::new();
+    let images = toml_texture::ImageSource {
+        folder: &scene_folder,
+        files,
+    };
     for (name, material) in &spec.materials {
         let path = document::child_path("materials", name);
-        let material = validate::material(&doc, &path, material)?;
-        materials.add_named(name, material);
+        let (material, textures) = validate::material(&doc, &path, material, &images)?;
+        let index = materials.add_named(name, material);
+        if !textures.is_empty() {
+            textured_materials.push(TexturedMaterial {
+                material: index,
+                textures,
+            });
+        }
     }
 
     let mut shapes = Vec::new();
@@ -554,6 +573,7 @@ pub fn parse_with(
         shapes,
         prototypes: Vec::new(),
         instances: Vec::new(),
+        textured_materials,
         response: ImageResponse::default(),
     };
     report

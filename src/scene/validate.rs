@@ -7,16 +7,17 @@
 
 use super::document::{Document, child_path};
 use super::format::{
-    CameraSpec, DEFAULT_CONE_DELTA, LightSpec, MaterialSpec, MeshLightSpec, MeshSpec,
+    CameraSpec, ColourSpec, DEFAULT_CONE_DELTA, LightSpec, MaterialSpec, MeshLightSpec, MeshSpec,
     ProjectionSpec, QuadSpec, Scale, SphereSpec,
 };
 use super::rules::{self, InvalidField, PARALLEL_SINE, check_light, check_material};
+use super::toml_texture::{self, ImageSource};
 use super::transform::Transform;
 use super::{
-    Camera, CropWindow, Light, Material, Projection, SceneError, Shape, SpotFalloff, ThinLens,
-    TriangleMesh,
+    Camera, CropWindow, Light, Material, Projection, SceneError, Shape, SpotFalloff, Texture,
+    TexturedParameter, ThinLens, TriangleMesh,
 };
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 
 /// The names of [`SpotFalloff`]s in the scene file.
@@ -310,23 +311,43 @@ pub(crate) fn material(
     doc: &Document,
     path: &str,
     spec: &MaterialSpec,
-) -> Result<Material, SceneError> {
-    let rgb_or_one = |rgb: Option<[f32; 3]>| rgb.map_or(Vec3::ONE, Vec3::from_array);
+    images: &ImageSource,
+) -> Result<(Material, Vec<(TexturedParameter, Texture)>), SceneError> {
+    let mut textures = Vec::new();
+    let mut colour = |field: &str,
+                      given: Option<&ColourSpec>,
+                      parameter: TexturedParameter|
+     -> Result<Vec3, SceneError> {
+        let Some(given) = given else {
+            return Ok(Vec3::ONE);
+        };
+        let (value, texture) = toml_texture::colour(doc, &child_path(path, field), given, images)?;
+        textures.extend(texture.map(|t| (parameter, t)));
+        Ok(value)
+    };
     let material = match spec {
         MaterialSpec::Diffuse(diffuse) => Material::Diffuse {
-            albedo: Vec3::from_array(diffuse.albedo),
+            albedo: colour("albedo", Some(&diffuse.albedo), TexturedParameter::Albedo)?,
         },
         MaterialSpec::Mirror(mirror) => Material::Mirror {
-            tint: rgb_or_one(mirror.tint),
+            tint: colour("tint", mirror.tint.as_ref(), TexturedParameter::Tint)?,
         },
         MaterialSpec::Glass(glass) => Material::Glass {
             ior: glass.ior,
-            reflect_tint: rgb_or_one(glass.reflect_tint),
-            transmit_tint: rgb_or_one(glass.transmit_tint),
+            reflect_tint: colour(
+                "reflect_tint",
+                glass.reflect_tint.as_ref(),
+                TexturedParameter::ReflectTint,
+            )?,
+            transmit_tint: colour(
+                "transmit_tint",
+                glass.transmit_tint.as_ref(),
+                TexturedParameter::TransmitTint,
+            )?,
         },
     };
     check_material(&material).map_err(at(doc, path))?;
-    Ok(material)
+    Ok((material, textures))
 }
 
 pub(crate) fn sphere(
@@ -361,6 +382,8 @@ pub(crate) fn quad(
             corner + edge_v,
         ],
         normals: None,
+        // (u, v) run along edge_u and edge_v from the corner.
+        uvs: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         material,
     }))

@@ -386,6 +386,7 @@ mod tests {
         let mesh = Shape::Triangles(TriangleMesh {
             positions: positions.clone(),
             normals: None,
+            uvs: None,
             triangles: triangles.clone(),
             material: 0,
         });

@@ -1,7 +1,7 @@
 //! The world: a scene description turned into one committed Embree scene, plus what light
 //! transport asks of a hit (position, normals, material or emitter), of the lights
 //! ([`lights`], each prepared once as a [`lights::LightSource`]) and of a ray that leaves the
-//! scene (the environment's radiance). Owns the link between Embree geometry ids and scene objects; must not store
+//! scene (the environment's radiance), and a material's values at a hit ([`texturing`]). Owns the link between Embree geometry ids and scene objects; must not store
 //! photons, estimate radiance or know about images.
 
 pub mod aim;
@@ -10,10 +10,11 @@ pub mod aim_guide;
 mod hit_normals;
 mod instancing;
 pub mod lights;
+pub mod texturing;
 
 use crate::embree::{self, EmbreeError};
 use crate::scene::{Light, Material, SceneDescription, Shape, TriangleMesh};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use hit_normals::{HitNormals, TriangleNormals, normals_at, sphere_normals};
 use instancing::Instancing;
 use lights::LightSource;
@@ -36,6 +37,11 @@ pub struct Interaction {
     /// Unit shading normal (interpolated vertex normals), on the geometric normal's side.
     pub shading_normal: Vec3,
     pub surface: Surface,
+    /// Where on its geometry the hit lies, for textures: the Embree geometry, the triangle
+    /// and its barycentric weights of corners 1 and 2.
+    pub(crate) geometry: u32,
+    pub(crate) primitive: u32,
+    pub(crate) barycentric: Vec2,
 }
 
 impl Interaction {
@@ -155,6 +161,8 @@ pub struct World {
     background: Vec3,
     /// The image environments, whose radiance a leaving ray adds by its direction.
     sky_maps: Vec<LightSource>,
+    /// The textured materials and the texture coordinates of their geometries.
+    texturing: texturing::Texturing,
 }
 
 impl World {
@@ -293,7 +301,9 @@ impl World {
             .filter(|l| l.has_directional_sky())
             .cloned()
             .collect();
+        let texturing = texturing::Texturing::new(&description);
         Ok(Self {
+            texturing,
             description,
             accel,
             surfaces,
@@ -315,8 +325,27 @@ impl World {
         self.scale * 2e-5
     }
 
+    /// Material `id` as the scene gives it: its untextured values (a textured parameter's
+    /// typical value). What a hit sees is [`World::material_at`].
     pub fn material(&self, id: u32) -> &Material {
         &self.description.materials[id as usize]
+    }
+
+    /// Material `id` at `hit`: its textured parameters evaluated at the hit's (u, v), the
+    /// material itself when it has none.
+    #[inline(always)]
+    pub fn material_at(&self, id: u32, hit: &Interaction) -> Material {
+        let base = &self.description.materials[id as usize];
+        match self.texturing.textured(id) {
+            None => *base,
+            Some(textured) => textured.evaluate(base, self.uv_at(hit)),
+        }
+    }
+
+    /// The texture coordinates at `hit` (zero on geometries without textures).
+    pub fn uv_at(&self, hit: &Interaction) -> Vec2 {
+        self.texturing
+            .uv(hit.geometry, hit.primitive, hit.barycentric, hit.position)
     }
 
     /// Radiance arriving along a ray that leaves the scene along the unit `direction` (the
@@ -408,6 +437,15 @@ impl World {
             geometric_normal,
             shading_normal,
             surface,
+            // A prototype's geometry ids are not the top level's: no texture coordinates there
+            // (the scene readers refuse textured materials inside objects).
+            geometry: if hit.instance.is_some() {
+                u32::MAX
+            } else {
+                hit.geometry
+            },
+            primitive: hit.primitive,
+            barycentric: Vec2::new(hit.u, hit.v),
         }
     }
 }

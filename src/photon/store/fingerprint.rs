@@ -1,9 +1,9 @@
 //! The FNV-1a hash of photon map files and films, and the scene fingerprint built on it: every
-//! number photon tracing reads from a scene (lights, materials, shapes), bit for bit, so a map
+//! number photon tracing reads from a scene (lights, materials and their textures, shapes), bit for bit, so a map
 //! or film of another scene is refused. Owns the hash and what the fingerprint covers; knows
 //! nothing of the file formats that use them.
 
-use crate::scene::{Light, Material, SceneDescription, Shape, SpotFalloff, TriangleMesh};
+use crate::scene::{Light, Material, SceneDescription, Shape, SpotFalloff, Texture, TriangleMesh};
 use glam::Vec3;
 
 /// FNV-1a, 64 bit: the file checksum and the scene fingerprint.
@@ -186,6 +186,30 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
                 .for_each(|&x| h.f32(x));
         }
     }
+    // Only a textured scene hashes textures and texture coordinates, so an untextured
+    // scene's fingerprint (and its saved maps) stays what it was before textures.
+    if !scene.textured_materials.is_empty() {
+        h.u64(scene.textured_materials.len() as u64);
+        for textured in &scene.textured_materials {
+            h.u32(textured.material);
+            h.u64(textured.textures.len() as u64);
+            for (parameter, texture) in &textured.textures {
+                h.u32(*parameter as u32);
+                h.texture(texture);
+            }
+        }
+        let placed = scene.prototypes.iter().flat_map(|p| &p.shapes);
+        for shape in scene.shapes.iter().chain(placed) {
+            if let Shape::Triangles(mesh) = shape {
+                let uvs = mesh.uvs.as_deref().unwrap_or_default();
+                h.u64(uvs.len() as u64);
+                uvs.iter().for_each(|t| {
+                    h.f32(t.x);
+                    h.f32(t.y);
+                });
+            }
+        }
+    }
     h.finish()
 }
 
@@ -206,6 +230,57 @@ fn shapes(h: &mut Fnv64, shapes: &[Shape]) {
             Shape::Triangles(mesh) => {
                 h.u32(1);
                 h.mesh(mesh);
+            }
+        }
+    }
+}
+
+impl Fnv64 {
+    fn texture(&mut self, texture: &Texture) {
+        match texture {
+            Texture::Constant(c) => {
+                self.u32(0);
+                self.vec3(*c);
+            }
+            Texture::Image {
+                image,
+                mapping,
+                wrap,
+                scale,
+                invert,
+            } => {
+                self.u32(1);
+                self.u64(image.width as u64);
+                image.texels.iter().for_each(|&t| self.vec3(t));
+                (mapping.scale.to_array().iter())
+                    .chain(&mapping.delta.to_array())
+                    .for_each(|&x| self.f32(x));
+                self.u32(*wrap as u32);
+                self.f32(*scale);
+                self.u32(u32::from(*invert));
+            }
+            Texture::Checkerboard { mapping, even, odd } => {
+                self.u32(2);
+                (mapping.scale.to_array().iter())
+                    .chain(&mapping.delta.to_array())
+                    .for_each(|&x| self.f32(x));
+                self.texture(even);
+                self.texture(odd);
+            }
+            Texture::Scale(a, b) => {
+                self.u32(3);
+                self.texture(a);
+                self.texture(b);
+            }
+            Texture::Mix {
+                first,
+                second,
+                amount,
+            } => {
+                self.u32(4);
+                self.texture(first);
+                self.texture(second);
+                self.texture(amount);
             }
         }
     }

@@ -245,6 +245,19 @@ impl ParamList {
         Err(p.error(format!("must be of type {}", types.join(" or "))))
     }
 
+    /// The texture parameter `name` names, when `name` is given as a `texture` (pbrt looks
+    /// textures up first); `None` when it is absent or a constant.
+    pub fn texture(&self, name: &str) -> Result<Option<String>, ParamError> {
+        let Some(p) = self.lookup(name).filter(|p| p.ty == "texture") else {
+            return Ok(None);
+        };
+        p.used.set(true);
+        match &p.values[..] {
+            [Value::Str(s)] => Ok(Some(s.clone())),
+            _ => Err(p.error("must be one texture name (a string)")),
+        }
+    }
+
     pub fn floats(&self, name: &str) -> Result<Option<Vec<f32>>, ParamError> {
         self.find(name)
             .map(|p| self.typed(p, &["float"])?.numbers())
@@ -295,6 +308,22 @@ impl ParamList {
                 Ok(xs
                     .chunks_exact(3)
                     .map(|c| Vec3::new(c[0], c[1], c[2]))
+                    .collect())
+            })
+            .transpose()
+    }
+
+    /// Pairs of a `point2` or `vector2`, or `float`s taken two at a time (pbrt-v3's `uv`).
+    pub fn vec2s(&self, name: &str) -> Result<Option<Vec<glam::Vec2>>, ParamError> {
+        self.find(name)
+            .map(|p| {
+                let xs = self.typed(p, &["point2", "vector2", "float"])?.numbers()?;
+                if xs.len() % 2 != 0 {
+                    return Err(p.error(format!("has {} numbers, not a multiple of 2", xs.len())));
+                }
+                Ok(xs
+                    .chunks_exact(2)
+                    .map(|c| glam::Vec2::new(c[0], c[1]))
                     .collect())
             })
             .transpose()

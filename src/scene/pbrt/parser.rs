@@ -73,6 +73,15 @@ pub(super) struct InstanceItem {
     pub at: Place,
 }
 
+/// A `Texture` directive: its name, its type as written (`spectrum`, `color` or `float`) and
+/// its class (`item.kind`) with its parameters.
+#[derive(Debug)]
+pub(super) struct TextureItem {
+    pub name: String,
+    pub ty: String,
+    pub item: Item,
+}
+
 /// What the files say, in order, with their transforms resolved.
 #[derive(Debug, Default)]
 pub(super) struct Parsed {
@@ -86,6 +95,8 @@ pub(super) struct Parsed {
     pub area_lights: Vec<Item>,
     pub objects: Vec<ObjectItem>,
     pub instances: Vec<InstanceItem>,
+    /// In the order they are defined.
+    pub textures: Vec<TextureItem>,
     /// Directives read and deliberately not used (Sampler, Integrator, ...), for the report.
     pub ignored: Vec<String>,
     pub warnings: Vec<String>,
@@ -320,10 +331,19 @@ impl Parser<'_> {
             "Texture" => {
                 self.in_world(&place, directive)?;
                 let name = args.string("name")?;
-                let _ty = args.string("type")?;
+                let ty = args.string("type")?;
                 let class = args.string("class")?;
-                self.params(args)?;
-                self.out.ignored.push(format!("{place}: Texture \"{name}\" ({class}): textures are not supported; a material that uses it is refused"));
+                let mut params = self.params(args)?;
+                params.add_defaults(&self.state.defaults_for(AttributeTarget::Texture));
+                self.out.textures.push(TextureItem {
+                    name,
+                    ty,
+                    item: Item {
+                        kind: class,
+                        params,
+                        at: place,
+                    },
+                });
             }
             "MakeNamedMedium" => {
                 let name = args.string("name")?;

@@ -1,5 +1,6 @@
 //! PLY meshes (ASCII, binary little- and big-endian): vertex positions, optional vertex
-//! normals, and faces of three or four corners (quads split in two). Owns the file format and
+//! normals and texture coordinates (`u, v`, `s, t`, `texture_u, texture_v` or
+//! `texture_s, texture_t`), and faces of three or four corners (quads split in two). Owns the file format and
 //! its errors; the caller places the mesh in the world. A count in the header is checked
 //! against the bytes (or lines) the file really has before anything is allocated for it, so a
 //! header that claims 10¹² vertices is refused, not obeyed. Must not know scenes or Embree.
@@ -8,7 +9,7 @@ mod body;
 
 use super::files::SceneFiles;
 use body::{AsciiBody, Body, element_error};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 /// A mesh as the file gives it, in the file's own coordinates.
@@ -16,6 +17,7 @@ use std::path::Path;
 pub struct PlyMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -323,8 +325,23 @@ fn header(bytes: &[u8]) -> Result<(Encoding, Vec<Element>, usize, usize), PlyErr
     Ok((encoding, elements, at, line_no))
 }
 
-/// The position (x, y, z) and normal (nx, ny, nz) properties of `vertex`, by index.
-fn vertex_layout(element: &Element) -> Result<([usize; 3], Option<[usize; 3]>), PlyError> {
+/// Where `vertex` keeps a position (x, y, z), a normal (nx, ny, nz) and texture coordinates,
+/// by property index.
+struct VertexLayout {
+    position: [usize; 3],
+    normal: Option<[usize; 3]>,
+    uv: Option<[usize; 2]>,
+}
+
+/// The names texture coordinates go by in PLY files, in the order they are looked for.
+const UV_NAMES: [[&str; 2]; 4] = [
+    ["u", "v"],
+    ["s", "t"],
+    ["texture_u", "texture_v"],
+    ["texture_s", "texture_t"],
+];
+
+fn vertex_layout(element: &Element) -> Result<VertexLayout, PlyError> {
     let index = |name: &str| {
         element
             .properties
@@ -350,7 +367,15 @@ fn vertex_layout(element: &Element) -> Result<([usize; 3], Option<[usize; 3]>), 
             ));
         }
     };
-    Ok(([x, y, z], normal))
+    let uv = UV_NAMES.iter().find_map(|names| match names.map(index) {
+        [Some(a), Some(b)] => Some([a, b]),
+        _ => None,
+    });
+    Ok(VertexLayout {
+        position: [x, y, z],
+        normal,
+        uv,
+    })
 }
 
 fn read_vertices(reader: &mut Body, element: &Element, mesh: &mut PlyMesh) -> Result<(), PlyError> {
@@ -361,9 +386,14 @@ fn read_vertices(reader: &mut Body, element: &Element, mesh: &mut PlyMesh) -> Re
             "has more vertices than u32 indices can name",
         ));
     }
-    let (position, normal) = vertex_layout(element)?;
+    let VertexLayout {
+        position,
+        normal,
+        uv,
+    } = vertex_layout(element)?;
     mesh.positions.reserve(element.count);
     let mut normals = normal.map(|_| Vec::with_capacity(element.count));
+    let mut uvs = uv.map(|_| Vec::with_capacity(element.count));
     let mut values = vec![0.0f64; element.properties.len()];
     for i in 0..element.count {
         reader.begin("vertex", i)?;
@@ -388,8 +418,21 @@ fn read_vertices(reader: &mut Body, element: &Element, mesh: &mut PlyMesh) -> Re
             }
             normals.push(n);
         }
+        if let (Some(uvs), Some([a, b])) = (uvs.as_mut(), uv) {
+            let t = Vec2::new(values[a] as f32, values[b] as f32);
+            if !t.is_finite() {
+                return Err(element_error(
+                    reader,
+                    "vertex",
+                    i,
+                    "texture coordinate is not finite",
+                ));
+            }
+            uvs.push(t);
+        }
     }
     mesh.normals = normals;
+    mesh.uvs = uvs;
     Ok(())
 }
 
@@ -459,117 +502,4 @@ fn read_faces(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const ASCII_QUAD: &str = "ply\nformat ascii 1.0\ncomment a unit square\nelement vertex 4\n\
-        property float x\nproperty float y\nproperty float z\nelement face 1\n\
-        property list uchar int vertex_indices\nend_header\n\
-        0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
-
-    fn binary(big: bool) -> Vec<u8> {
-        let format = if big {
-            "binary_big_endian"
-        } else {
-            "binary_little_endian"
-        };
-        let mut b = format!(
-            "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
-             property float z\nproperty float nx\nproperty float ny\nproperty float nz\n\
-             element face 1\nproperty list uchar uint vertex_indices\nend_header\n"
-        )
-        .into_bytes();
-        let f = |x: f32| {
-            if big {
-                x.to_be_bytes()
-            } else {
-                x.to_le_bytes()
-            }
-        };
-        for p in [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
-            for x in p.into_iter().chain([0.0, 0.0, 1.0]) {
-                b.extend(f(x));
-            }
-        }
-        b.push(3);
-        for i in [0u32, 1, 2] {
-            b.extend(if big {
-                i.to_be_bytes()
-            } else {
-                i.to_le_bytes()
-            });
-        }
-        b
-    }
-
-    #[test]
-    fn an_ascii_quad_becomes_two_triangles() {
-        let m = parse(ASCII_QUAD.as_bytes()).unwrap();
-        assert_eq!(m.positions.len(), 4);
-        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
-        assert_eq!(m.normals, None);
-    }
-
-    #[test]
-    fn both_byte_orders_read_the_same_mesh() {
-        let little = parse(&binary(false)).unwrap();
-        let big = parse(&binary(true)).unwrap();
-        assert_eq!(little, big);
-        assert_eq!(little.positions[1], Vec3::X);
-        assert_eq!(little.normals.as_ref().unwrap()[2], Vec3::Z);
-        assert_eq!(little.triangles, vec![[0, 1, 2]]);
-    }
-
-    #[test]
-    fn a_truncated_binary_body_is_refused_without_reading_past_it() {
-        let full = binary(false);
-        for cut in [full.len() - 1, full.len() - 13, full.len() - 40] {
-            let err = parse(&full[..cut]).unwrap_err();
-            assert!(
-                err.message.contains("ends") || err.message.contains("claims"),
-                "cut {cut}: {err:?}"
-            );
-        }
-    }
-
-    #[test]
-    fn a_huge_claimed_count_is_refused_before_allocating() {
-        let text = ASCII_QUAD.replace("element vertex 4", "element vertex 1000000000000");
-        let err = parse(text.as_bytes()).unwrap_err();
-        assert_eq!(err.line, Some(4));
-        assert!(err.message.contains("claims"), "{err:?}");
-        let mut b = binary(false);
-        let at = b.windows(9).position(|w| w == b"vertex 3\n").unwrap();
-        b.splice(at..at + 9, b"vertex 999999999999\n".iter().copied());
-        assert!(parse(&b).unwrap_err().message.contains("claims"));
-    }
-
-    #[test]
-    fn header_and_body_mistakes_name_their_line() {
-        for (from, to, line, needle) in [
-            ("ply\n", "plx\n", Some(1), "ply"),
-            ("format ascii 1.0", "format ebcdic 1.0", Some(2), "ebcdic"),
-            (
-                "property float z",
-                "property quad z",
-                Some(7),
-                "not a PLY type",
-            ),
-            ("4 0 1 2 3", "4 0 1 2 9", Some(15), "not one of the 4"),
-            (
-                "4 0 1 2 3",
-                "5 0 1 2 3 0",
-                Some(15),
-                "only triangles and quads",
-            ),
-            ("1 1 0\n", "1 1\n", Some(13), "too few"),
-            ("0 1 0\n", "0 1 0 7\n", Some(14), "values"),
-            ("end_header\n", "end_headr\n", Some(10), "keyword"),
-        ] {
-            let text = ASCII_QUAD.replace(from, to);
-            let err = parse(text.as_bytes()).unwrap_err();
-            assert_eq!(err.line, line, "{to}: {err:?}");
-            assert!(err.message.contains(needle), "{to}: {err:?}");
-        }
-    }
-}
+mod tests;

@@ -20,14 +20,13 @@ use glam::Vec3;
 pub(crate) const RELATIVE_ERROR_BOUND: f64 = 5e-4;
 
 /// Object-space triangles with a unit normal per vertex (when the surface defines one) and
-/// each vertex's (u, v) surface parameters, as pbrt defines them for the shape, so that
-/// textures can be mapped once meshes carry texture coordinates.
+/// each vertex's (u, v) surface parameters, as pbrt defines them for the shape (the texture
+/// coordinates of the mesh it becomes).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Tessellation {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
     pub triangles: Vec<[u32; 3]>,
-    #[cfg_attr(not(test), allow(dead_code))] // read once TriangleMesh carries uvs
     pub uv: Vec<[f32; 2]>,
 }
 

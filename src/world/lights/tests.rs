@@ -30,6 +30,7 @@ fn square_mesh(facing_down: bool) -> TriangleMesh {
             Vec3::new(0.5, -0.5, 2.0),
         ],
         normals: None,
+        uvs: None,
         triangles,
         material: 0,
     }
@@ -349,6 +350,7 @@ fn mesh_points_are_drawn_by_area() {
             Vec3::new(10.0, 2.0, 0.0),
         ],
         normals: None,
+        uvs: None,
         triangles: vec![[0, 1, 2], [3, 4, 5]],
         material: 0,
     };

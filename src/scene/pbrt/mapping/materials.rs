@@ -2,13 +2,16 @@
 //! `conductor`/`metal` → mirror (tinted by their reflectance), `glass`/`dielectric` →
 //! glass. Materials with more lobes than dpm has (`uber`, `plastic`, `substrate`,
 //! `coateddiffuse`, rough metals) become their diffuse part with one warning, or an error
-//! under `--strict`. Owns that table; must not read files.
+//! under `--strict`. A colour or index given as a texture ([`super::textures`]) becomes a
+//! textured parameter of the material. Owns that table; must not read files.
 
 use super::super::Place;
 use super::super::params::ParamList;
+use super::textures::TextureType;
 use super::{Mapper, param_error};
-use crate::scene::{Material, SceneError};
+use crate::scene::{Material, SceneError, Texture, TexturedParameter};
 use glam::Vec3;
+use std::cell::RefCell;
 
 /// Refractive indices at the d line (587.6 nm) of the named glasses pbrt-v4 ships, from
 /// Schott's catalogue.
@@ -33,6 +36,9 @@ pub(super) struct Mapped {
     pub material: Material,
     /// Why this is an approximation, when it is one.
     pub approximation: Option<String>,
+    /// The parameters of `material` that textures give (`material` holds their typical
+    /// values).
+    pub textures: Vec<(TexturedParameter, Texture)>,
 }
 
 impl Mapper<'_> {
@@ -43,15 +49,41 @@ impl Mapper<'_> {
         at: &Place,
     ) -> Result<Mapped, SceneError> {
         let p = |e| param_error("Material", e);
+        // The textures read, by parameter name; the material takes their typical values.
+        let textured = RefCell::new(Vec::<(String, Texture)>::new());
         let colour = |name: &str, default: f32| -> Result<Vec3, SceneError> {
-            Ok(params
-                .colour(name)
-                .map_err(p)?
-                .unwrap_or(Vec3::splat(default)))
+            match self.parameter_if_given(params, "Material", name, TextureType::Colour)? {
+                None => Ok(Vec3::splat(default)),
+                Some(Texture::Constant(c)) => Ok(c),
+                Some(t) => {
+                    let typical = t.typical().clamp(Vec3::ZERO, Vec3::ONE);
+                    textured.borrow_mut().push((name.to_string(), t));
+                    Ok(typical)
+                }
+            }
+        };
+        // An index of refraction, which a float texture may give.
+        let index = |name: &str| -> Result<Option<f32>, SceneError> {
+            match self.parameter_if_given(params, "Material", name, TextureType::Float)? {
+                None => Ok(None),
+                Some(Texture::Constant(c)) => Ok(Some(c.x)),
+                Some(t) => {
+                    let typical = t.typical().x.max(1.0);
+                    textured.borrow_mut().push((name.to_string(), t));
+                    Ok(Some(typical))
+                }
+            }
+        };
+        // A float dpm only compares with 0 (roughness, sigma): a texture's typical value.
+        let float = |name: &str| -> Result<Option<f32>, SceneError> {
+            Ok(self
+                .parameter_if_given(params, "Material", name, TextureType::Float)?
+                .map(|t| t.typical().x))
         };
         let exact = |material| Mapped {
             material,
             approximation: None,
+            textures: Vec::new(),
         };
         let diffuse_part = |name: &str, default: f32| -> Result<Mapped, SceneError> {
             let albedo = colour(name, default)?;
@@ -62,19 +94,20 @@ impl Mapper<'_> {
                      has no glossy or coated lobes",
                     rgb_text(albedo)
                 )),
+                textures: Vec::new(),
             })
         };
         let roughness = |names: &[&str]| -> Result<f32, SceneError> {
             let mut r: f32 = 0.0;
             for name in names {
-                r = r.max(params.float(name).map_err(p)?.unwrap_or(0.0));
+                r = r.max(float(name)?.unwrap_or(0.0));
             }
             Ok(r)
         };
         let mapped = match kind {
             "matte" => {
                 let albedo = colour("Kd", 0.5)?;
-                let sigma = params.float("sigma").map_err(p)?.unwrap_or(0.0);
+                let sigma = float("sigma")?.unwrap_or(0.0);
                 Mapped {
                     material: Material::Diffuse { albedo },
                     approximation: (sigma != 0.0).then(|| {
@@ -82,6 +115,7 @@ impl Mapper<'_> {
                             "matte \"sigma\" {sigma}: Oren–Nayar roughness is rendered as Lambert"
                         )
                     }),
+                    textures: Vec::new(),
                 }
             }
             "diffuse" => exact(Material::Diffuse {
@@ -92,10 +126,9 @@ impl Mapper<'_> {
                 exact(Material::Mirror { tint })
             }
             "glass" => {
-                let ior = params.float("index").map_err(p)?;
-                let ior = match ior {
+                let ior = match index("index")? {
                     Some(x) => x,
-                    None => params.float("eta").map_err(p)?.unwrap_or(1.5),
+                    None => index("eta")?.unwrap_or(1.5),
                 };
                 let rough = roughness(&["uroughness", "vroughness"])?;
                 params.bool("remaproughness").map_err(p)?;
@@ -108,6 +141,7 @@ impl Mapper<'_> {
                     material,
                     approximation: (rough > 0.0)
                         .then(|| format!("glass roughness {rough} is rendered as smooth glass")),
+                    textures: Vec::new(),
                 }
             }
             "dielectric" | "thindielectric" => {
@@ -124,7 +158,7 @@ impl Mapper<'_> {
                         )
                             })?
                         }
-                        None => match params.float("eta").map_err(p)? {
+                        None => match index("eta")? {
                             Some(x) => x,
                             None => params.colour("eta").map_err(p)?.map_or(1.5, |c| c.x),
                         },
@@ -139,12 +173,17 @@ impl Mapper<'_> {
                 Mapped {
                     material: Material::clear_glass(ior),
                     approximation: why,
+                    textures: Vec::new(),
                 }
             }
             "conductor" | "metal" => {
-                let reflectance = self.conductor_reflectance(params, at)?;
+                let reflectance = if params.texture("reflectance").map_err(p)?.is_some() {
+                    colour("reflectance", 1.0)?
+                } else {
+                    self.conductor_reflectance(params, at)?
+                };
                 let default_roughness = if kind == "metal" { 0.01 } else { 0.0 };
-                let rough = match params.float("roughness").map_err(p)? {
+                let rough = match float("roughness")? {
                     Some(r) => r.max(roughness(&["uroughness", "vroughness"])?),
                     None => {
                         let r = roughness(&["uroughness", "vroughness"])?;
@@ -168,6 +207,7 @@ impl Mapper<'_> {
                              normal-incidence reflectance {}; dpm has no glossy lobe",
                             rgb_text(reflectance)
                         )),
+                        textures: Vec::new(),
                     }
                 }
             }
@@ -198,6 +238,10 @@ impl Mapper<'_> {
                 return Err(at.error("Material", format!("\"{other}\" is not a pbrt material")));
             }
         };
+        let mut mapped = mapped;
+        mapped.textures = (textured.into_inner().into_iter())
+            .map(|(name, texture)| (textured_parameter(&mapped.material, &name), texture))
+            .collect();
         for ignored in ["bumpmap", "displacement", "normalmap"] {
             if params.at(ignored).is_some() {
                 self.warn(at, format!("material \"{kind}\": \"{ignored}\" is ignored"));
@@ -285,7 +329,10 @@ impl Mapper<'_> {
                     .map_err(|_| refuse(format!("`{w}` is not a number")))
             })
             .collect::<Result<_, _>>()?;
-        if numbers.len() < 2 || numbers.len() % 2 != 0 || numbers.iter().any(|x| !x.is_finite()) {
+        if numbers.len() < 2
+            || !numbers.len().is_multiple_of(2)
+            || numbers.iter().any(|x| !x.is_finite())
+        {
             return Err(refuse(
                 "is not (wavelength, value) pairs of finite numbers".into(),
             ));
@@ -309,6 +356,17 @@ impl Mapper<'_> {
         let white = crate::spectrum::xyz_to_linear_srgb(crate::spectrum::spectrum_xyz(|_| 1.0));
         let rgb = crate::spectrum::xyz_to_linear_srgb(crate::spectrum::spectrum_xyz(value)) / white;
         Ok(rgb.as_vec3())
+    }
+}
+
+/// Which of `material`'s parameters the pbrt parameter `name` became.
+fn textured_parameter(material: &Material, name: &str) -> TexturedParameter {
+    match (material, name) {
+        (Material::Diffuse { .. }, _) => TexturedParameter::Albedo,
+        (Material::Mirror { .. }, _) => TexturedParameter::Tint,
+        (Material::Glass { .. }, "Kr") => TexturedParameter::ReflectTint,
+        (Material::Glass { .. }, "Kt") => TexturedParameter::TransmitTint,
+        (Material::Glass { .. }, _) => TexturedParameter::Ior,
     }
 }
 

@@ -12,13 +12,15 @@ mod lights;
 mod materials;
 mod shapes;
 mod tessellated;
+mod textures;
 
 use super::params::ParamError;
 use super::parser::{Item, Parsed};
 use super::{Dialect, Place};
 use crate::scene::files::SceneFiles;
 use crate::scene::{
-    Instance, LoadOptions, LoadReport, Material, Prototype, SceneDescription, SceneError, validate,
+    Instance, LoadOptions, LoadReport, Material, Prototype, SceneDescription, SceneError, Texture,
+    TexturedMaterial, validate,
 };
 use glam::Vec3;
 use std::collections::HashMap;
@@ -34,6 +36,10 @@ pub(super) struct Mapper<'f> {
     /// Scene material index of each parsed material definition (`usize::MAX`: pbrt's
     /// default), filled on first use.
     material_index: HashMap<usize, u32>,
+    /// The named textures defined so far, with what they give, or why they cannot be used.
+    textures: HashMap<String, (textures::TextureType, Result<Texture, SceneError>)>,
+    /// The materials mapped so far that have textured parameters.
+    textured_materials: Vec<TexturedMaterial>,
 }
 
 /// A parameter's error, placed where the parameter was written (after an `Include`, maybe
@@ -62,6 +68,8 @@ pub(super) fn scene(
         report: LoadReport::default(),
         materials: Vec::new(),
         material_index: HashMap::new(),
+        textures: HashMap::new(),
+        textured_materials: Vec::new(),
     };
     m.report.warnings.extend(parsed.warnings.iter().cloned());
     let version = match m.dialect.0 {
@@ -77,6 +85,7 @@ pub(super) fn scene(
             .iter()
             .map(|i| format!("{i}: ignored (dpm's own settings and flags apply)")),
     );
+    m.define_textures(&parsed.textures)?;
     let film = m.film(parsed.film.as_ref(), parsed.camera.as_ref())?;
     let camera = m.camera(parsed.camera.as_ref(), film.resolution, film.crop)?;
     let mut lights = Vec::new();
@@ -129,6 +138,19 @@ pub(super) fn scene(
         ));
     }
     let instances = instances(&parsed, &prototypes)?;
+    for (object, prototype) in parsed.objects.iter().zip(&prototypes) {
+        let textured = |id: u32| m.textured_materials.iter().any(|t| t.material == id);
+        let uses_texture = prototype.shapes.iter().any(|s| match s {
+            crate::scene::Shape::Sphere { material, .. } => textured(*material),
+            crate::scene::Shape::Triangles(t) => textured(t.material),
+        });
+        if uses_texture {
+            return Err(object.at.error(
+                "ObjectBegin",
+                format!("object \"{}\" has a textured material: textures inside instanced objects are not supported yet", object.name),
+            ));
+        }
+    }
     if shapes.is_empty() && instances.is_empty() {
         return Err(first().error("Shape", "the scene has no shapes besides its lights"));
     }
@@ -141,6 +163,7 @@ pub(super) fn scene(
         prototypes,
         instances,
         response: film.response,
+        textured_materials: m.textured_materials,
     };
     let mut report = m.report;
     report
@@ -203,6 +226,7 @@ impl Mapper<'_> {
         if let Some(&i) = self.material_index.get(&key) {
             return Ok(i);
         }
+        let index = self.materials.len() as u32;
         let material = match which {
             None => Material::Diffuse {
                 albedo: Vec3::splat(0.5),
@@ -230,10 +254,15 @@ impl Mapper<'_> {
                 }
                 crate::scene::check_material(&mapped.material)
                     .map_err(|why| item.at.error("Material", format!("{label}: {why}")))?;
+                if !mapped.textures.is_empty() {
+                    self.textured_materials.push(TexturedMaterial {
+                        material: index,
+                        textures: mapped.textures,
+                    });
+                }
                 mapped.material
             }
         };
-        let index = self.materials.len() as u32;
         self.materials.push(material);
         self.material_index.insert(key, index);
         Ok(index)

@@ -9,11 +9,20 @@ use super::super::parser::{Item, ShapeItem};
 use super::tessellated::SphereCut;
 use super::{Mapper, param_error, require, value_error};
 use crate::scene::{SceneError, Shape, TriangleMesh, ply, rules};
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 
 /// A bilinear patch whose fourth corner is further than this (relative to its size) from
 /// the plane of the other three is not flat, and two triangles would not be the patch.
 const FLAT_PATCH: f32 = 1e-4;
+
+/// A mesh in its object space, as a shape gives it.
+pub(super) struct MeshData {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    /// Per vertex, as many as `positions`.
+    pub uvs: Option<Vec<Vec2>>,
+    pub triangles: Vec<[u32; 3]>,
+}
 
 /// A shape's geometry in world space, before it is given a material or made a light.
 pub(in super::super) enum Geometry {
@@ -66,9 +75,19 @@ impl Mapper<'_> {
                     return Err(value_error(item, "Shape", "indices", format!("has {} indices, not a multiple of 3", indices.len())));
                 }
                 let normals = item.params.vec3s("N").map_err(p)?;
-                ignore(item, &["uv", "st", "S", "faceIndices"]);
+                let uvs = match item.params.vec2s("uv").map_err(p)? {
+                    Some(uv) => Some(("uv", uv)),
+                    None => item.params.vec2s("st").map_err(p)?.map(|st| ("st", st)),
+                };
+                let uvs = match uvs {
+                    Some((name, uv)) if uv.len() != positions.len() => {
+                        return Err(value_error(item, "Shape", name, format!("has {} texture coordinates for {} points", uv.len(), positions.len())));
+                    }
+                    other => other.map(|(_, uv)| uv),
+                };
+                ignore(item, &["S", "faceIndices"]);
                 let triangles = corner_triples(item, &indices, positions.len())?;
-                self.mesh(shape, positions, normals, triangles)
+                self.mesh(shape, MeshData { positions, normals, uvs, triangles })
             }
             "plymesh" => {
                 let name = require(item.params.string("filename"), item, "filename", "Shape")?;
@@ -87,7 +106,7 @@ impl Mapper<'_> {
                         message: format!("{} (the mesh of the Shape at {})", e.message, item.at),
                     },
                 })?;
-                self.mesh(shape, read.positions, read.normals, read.triangles)
+                self.mesh(shape, MeshData { positions: read.positions, normals: read.normals, uvs: read.uvs, triangles: read.triangles })
             }
             "bilinearmesh" => {
                 let positions = require(item.params.vec3s("P"), item, "P", "Shape")?;
@@ -115,7 +134,7 @@ impl Mapper<'_> {
                     triangles.push([a, b, d]);
                     triangles.push([a, d, c]);
                 }
-                self.mesh(shape, positions, normals, triangles)
+                self.mesh(shape, MeshData { positions, normals, uvs: None, triangles })
             }
             "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" => self.quadric(shape),
             "loopsubdiv" => self.loop_subdivision(shape),
@@ -160,10 +179,14 @@ impl Mapper<'_> {
     pub(super) fn mesh(
         &mut self,
         shape: &ShapeItem,
-        positions: Vec<Vec3>,
-        normals: Option<Vec<Vec3>>,
-        triangles: Vec<[u32; 3]>,
+        mesh: MeshData,
     ) -> Result<Geometry, SceneError> {
+        let MeshData {
+            positions,
+            normals,
+            uvs,
+            triangles,
+        } = mesh;
         let item = &shape.item;
         if let Some(n) = &normals
             && n.len() != positions.len()
@@ -228,6 +251,7 @@ impl Mapper<'_> {
         Ok(Geometry::Triangles(TriangleMesh {
             positions: world,
             normals: world_normals,
+            uvs,
             triangles: kept,
             material: 0,
         }))

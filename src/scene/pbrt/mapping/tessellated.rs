@@ -5,11 +5,11 @@
 //! [`crate::scene::tessellate`]'s and the placing [`Mapper::mesh`]'s. Must not choose materials.
 
 use super::super::parser::{Item, ShapeItem};
-use super::shapes::{Geometry, corner_triples};
+use super::shapes::{Geometry, MeshData, corner_triples};
 use super::{Mapper, param_error, require, value_error};
 use crate::scene::SceneError;
 use crate::scene::tessellate::{self, Tessellation, loop_subdivision, quadrics::Quadric};
-use glam::{DVec3, Mat3, Vec3};
+use glam::{DVec3, Mat3, Vec2, Vec3};
 
 /// More subdivision levels than this multiplies even one triangle past memory.
 const MAX_LEVELS: i64 = 12;
@@ -203,7 +203,14 @@ impl Mapper<'_> {
                     format!("loopsubdiv: the mesh {why}"),
                 )
             })?;
-        self.mesh(shape, s.positions, Some(s.normals), s.triangles)
+        // pbrt's loopsubdiv makes no (u, v): its triangles take the default ones.
+        let mesh = MeshData {
+            positions: s.positions,
+            normals: Some(s.normals),
+            uvs: None,
+            triangles: s.triangles,
+        };
+        self.mesh(shape, mesh)
     }
 
     /// `heightfield`: `nu` × `nv` heights `Pz` over the unit square; wound as pbrt winds it,
@@ -242,8 +249,13 @@ impl Mapper<'_> {
     }
 
     fn tessellated(&mut self, shape: &ShapeItem, t: Tessellation) -> Result<Geometry, SceneError> {
-        // The (u, v) stay behind until TriangleMesh carries texture coordinates.
-        self.mesh(shape, t.positions, t.normals, t.triangles)
+        let mesh = MeshData {
+            positions: t.positions,
+            normals: t.normals,
+            uvs: Some(t.uv.into_iter().map(Vec2::from_array).collect()),
+            triangles: t.triangles,
+        };
+        self.mesh(shape, mesh)
     }
 }
 

@@ -1,0 +1,112 @@
+use super::*;
+
+const ASCII_QUAD: &str = "ply\nformat ascii 1.0\ncomment a unit square\nelement vertex 4\n\
+    property float x\nproperty float y\nproperty float z\nelement face 1\n\
+    property list uchar int vertex_indices\nend_header\n\
+    0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+
+fn binary(big: bool) -> Vec<u8> {
+    let format = if big {
+        "binary_big_endian"
+    } else {
+        "binary_little_endian"
+    };
+    let mut b = format!(
+        "ply\nformat {format} 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nproperty float nx\nproperty float ny\nproperty float nz\n\
+         element face 1\nproperty list uchar uint vertex_indices\nend_header\n"
+    )
+    .into_bytes();
+    let f = |x: f32| {
+        if big {
+            x.to_be_bytes()
+        } else {
+            x.to_le_bytes()
+        }
+    };
+    for p in [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for x in p.into_iter().chain([0.0, 0.0, 1.0]) {
+            b.extend(f(x));
+        }
+    }
+    b.push(3);
+    for i in [0u32, 1, 2] {
+        b.extend(if big {
+            i.to_be_bytes()
+        } else {
+            i.to_le_bytes()
+        });
+    }
+    b
+}
+
+#[test]
+fn an_ascii_quad_becomes_two_triangles() {
+    let m = parse(ASCII_QUAD.as_bytes()).unwrap();
+    assert_eq!(m.positions.len(), 4);
+    assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+    assert_eq!(m.normals, None);
+}
+
+#[test]
+fn both_byte_orders_read_the_same_mesh() {
+    let little = parse(&binary(false)).unwrap();
+    let big = parse(&binary(true)).unwrap();
+    assert_eq!(little, big);
+    assert_eq!(little.positions[1], Vec3::X);
+    assert_eq!(little.normals.as_ref().unwrap()[2], Vec3::Z);
+    assert_eq!(little.triangles, vec![[0, 1, 2]]);
+}
+
+#[test]
+fn a_truncated_binary_body_is_refused_without_reading_past_it() {
+    let full = binary(false);
+    for cut in [full.len() - 1, full.len() - 13, full.len() - 40] {
+        let err = parse(&full[..cut]).unwrap_err();
+        assert!(
+            err.message.contains("ends") || err.message.contains("claims"),
+            "cut {cut}: {err:?}"
+        );
+    }
+}
+
+#[test]
+fn a_huge_claimed_count_is_refused_before_allocating() {
+    let text = ASCII_QUAD.replace("element vertex 4", "element vertex 1000000000000");
+    let err = parse(text.as_bytes()).unwrap_err();
+    assert_eq!(err.line, Some(4));
+    assert!(err.message.contains("claims"), "{err:?}");
+    let mut b = binary(false);
+    let at = b.windows(9).position(|w| w == b"vertex 3\n").unwrap();
+    b.splice(at..at + 9, b"vertex 999999999999\n".iter().copied());
+    assert!(parse(&b).unwrap_err().message.contains("claims"));
+}
+
+#[test]
+fn header_and_body_mistakes_name_their_line() {
+    for (from, to, line, needle) in [
+        ("ply\n", "plx\n", Some(1), "ply"),
+        ("format ascii 1.0", "format ebcdic 1.0", Some(2), "ebcdic"),
+        (
+            "property float z",
+            "property quad z",
+            Some(7),
+            "not a PLY type",
+        ),
+        ("4 0 1 2 3", "4 0 1 2 9", Some(15), "not one of the 4"),
+        (
+            "4 0 1 2 3",
+            "5 0 1 2 3 0",
+            Some(15),
+            "only triangles and quads",
+        ),
+        ("1 1 0\n", "1 1\n", Some(13), "too few"),
+        ("0 1 0\n", "0 1 0 7\n", Some(14), "values"),
+        ("end_header\n", "end_headr\n", Some(10), "keyword"),
+    ] {
+        let text = ASCII_QUAD.replace(from, to);
+        let err = parse(text.as_bytes()).unwrap_err();
+        assert_eq!(err.line, line, "{to}: {err:?}");
+        assert!(err.message.contains(needle), "{to}: {err:?}");
+    }
+}

@@ -1,0 +1,105 @@
+//! Textured materials at a hit: each geometry's texture coordinates, laid out for resolving a
+//! hit's (u, v), and the textured materials by material id. Owns turning a hit into (u, v) —
+//! barycentric interpolation of a triangle's corners, pbrt's parametric (φ/2π, 1 − θ/π) on
+//! a sphere — and a material's values there. Built only for geometries whose material has
+//! textures, so a scene without textures carries nothing here and takes no extra work. Must
+//! not trace rays.
+
+use crate::scene::{SceneDescription, Shape, TexturedMaterial, TriangleMesh};
+use glam::{Vec2, Vec3};
+use std::f32::consts::{PI, TAU};
+
+/// A triangle's corners' (u, v) when its mesh has none (pbrt's default).
+const DEFAULT_CORNER_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::ONE];
+
+/// How one geometry's hits find their (u, v).
+enum GeometryUv {
+    /// Not textured: never asked.
+    Untextured,
+    /// Each triangle's corners' (u, v).
+    Triangles(Vec<[Vec2; 3]>),
+    /// A sphere's parametric (u, v) about its centre, in the world frame (dpm's spheres keep
+    /// no object frame: pbrt's would turn with the sphere's transform).
+    Sphere { center: Vec3 },
+}
+
+/// Everything evaluating textures at a hit reads.
+#[derive(Default)]
+pub(super) struct Texturing {
+    /// By material id; empty when the scene has no textures.
+    by_material: Vec<Option<TexturedMaterial>>,
+    /// By Embree geometry id, for the shapes (lights come after them and are never
+    /// textured).
+    uv: Vec<GeometryUv>,
+}
+
+impl Texturing {
+    pub(super) fn new(description: &SceneDescription) -> Self {
+        if description.textured_materials.is_empty() {
+            return Self::default();
+        }
+        let mut by_material = vec![None; description.materials.len()];
+        for t in &description.textured_materials {
+            by_material[t.material as usize] = Some(t.clone());
+        }
+        let uv = (description.shapes.iter())
+            .map(|shape| match shape {
+                Shape::Sphere {
+                    center, material, ..
+                } if by_material[*material as usize].is_some() => {
+                    GeometryUv::Sphere { center: *center }
+                }
+                Shape::Triangles(mesh) if by_material[mesh.material as usize].is_some() => {
+                    GeometryUv::Triangles(corner_uvs(mesh))
+                }
+                _ => GeometryUv::Untextured,
+            })
+            .collect();
+        Self { by_material, uv }
+    }
+
+    /// The textured material of id `material`, if it has textures.
+    #[inline(always)]
+    pub(super) fn textured(&self, material: u32) -> Option<&TexturedMaterial> {
+        self.by_material.get(material as usize)?.as_ref()
+    }
+
+    /// The (u, v) at a hit on `geometry`: triangle `primitive` at barycentrics
+    /// `barycentric` (the weights of corners 1 and 2), or the point `position`.
+    pub(super) fn uv(
+        &self,
+        geometry: u32,
+        primitive: u32,
+        barycentric: Vec2,
+        position: Vec3,
+    ) -> Vec2 {
+        match self.uv.get(geometry as usize) {
+            Some(GeometryUv::Triangles(corners)) => {
+                let [t0, t1, t2] = corners[primitive as usize];
+                (1.0 - barycentric.x - barycentric.y) * t0 + barycentric.x * t1 + barycentric.y * t2
+            }
+            Some(GeometryUv::Sphere { center }) => sphere_uv(position - *center),
+            _ => Vec2::ZERO,
+        }
+    }
+}
+
+/// pbrt's full sphere's (u, v) at the point `local` from its centre: u = φ/2π with φ from +x
+/// towards +y, v = 1 − θ/π with θ from +z (v = 0 at the −z pole, 1 at the +z pole).
+pub fn sphere_uv(local: Vec3) -> Vec2 {
+    let mut phi = local.y.atan2(local.x);
+    if phi < 0.0 {
+        phi += TAU;
+    }
+    let cos_theta = (local.z / local.length().max(f32::MIN_POSITIVE)).clamp(-1.0, 1.0);
+    Vec2::new(phi / TAU, 1.0 - cos_theta.acos() / PI)
+}
+
+fn corner_uvs(mesh: &TriangleMesh) -> Vec<[Vec2; 3]> {
+    match &mesh.uvs {
+        Some(uvs) => (mesh.triangles.iter())
+            .map(|t| t.map(|i| uvs[i as usize]))
+            .collect(),
+        None => vec![DEFAULT_CORNER_UVS; mesh.triangles.len()],
+    }
+}
