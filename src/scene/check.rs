@@ -55,9 +55,12 @@ impl SceneFiles for Patched {
 /// Checks the scene at `path`.
 pub fn check(path: &Path, options: &LoadOptions) -> CheckReport {
     let mut out = read_on(path, options);
-    // Found in the order loading meets them (lights before shapes): listed by place.
-    out.errors
-        .sort_by(|a, b| (&a.file, a.line, a.column).cmp(&(&b.file, b.line, b.column)));
+    // Found in the order loading meets them (lights before shapes): listed by place, the
+    // whole-scene ones (which may follow from directives set aside) last.
+    out.errors.sort_by_key(|e| {
+        let whole_scene = e.message.starts_with("the scene has no");
+        (whole_scene, e.file.clone(), e.line, e.column)
+    });
     out
 }
 
