@@ -7,7 +7,10 @@
 
 mod read;
 
-pub use read::{SceneImageFormat, decode_linear, read_image, read_pfm, srgb_to_linear};
+pub use read::{
+    MAX_SCENE_TEXELS, SceneImageFormat, decode_linear, decode_linear_within, read_image, read_pfm,
+    srgb_to_linear,
+};
 
 use glam::Vec3;
 use std::ffi::OsStr;

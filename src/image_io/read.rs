@@ -86,15 +86,53 @@ pub fn decode_linear(
     format: SceneImageFormat,
     srgb_decode: bool,
 ) -> Result<Image, String> {
+    decode_linear_within(bytes, format, srgb_decode, MAX_SCENE_TEXELS)
+}
+
+/// Texels past this are taken for a corrupt header, not an image (2^28: a 16k × 16k image).
+pub const MAX_SCENE_TEXELS: usize = 1 << 28;
+
+/// [`decode_linear`], refusing any image of more than `max_texels` texels before its pixels
+/// are allocated (a few compressed bytes can claim a huge image).
+pub fn decode_linear_within(
+    bytes: &[u8],
+    format: SceneImageFormat,
+    srgb_decode: bool,
+    max_texels: usize,
+) -> Result<Image, String> {
+    let too_large = |w: usize, h: usize| {
+        format!("the image claims {w}x{h} texels, more than the {max_texels} dpm reads")
+    };
     match format {
-        SceneImageFormat::Exr => decode_exr(bytes),
+        SceneImageFormat::Exr => {
+            let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
+                .map_err(|e| format!("cannot read the EXR: {e}"))?;
+            for header in &meta.headers {
+                let size = header.layer_size;
+                if size.width().saturating_mul(size.height()) > max_texels {
+                    return Err(too_large(size.width(), size.height()));
+                }
+            }
+            decode_exr(bytes)
+        }
         SceneImageFormat::Pfm => decode_pfm(bytes),
         SceneImageFormat::Png | SceneImageFormat::Tga => {
             let kind = match format {
                 SceneImageFormat::Png => image::ImageFormat::Png,
                 _ => image::ImageFormat::Tga,
             };
-            let decoded = image::load(Cursor::new(bytes), kind).map_err(|e| e.to_string())?;
+            let (w, h) = image::ImageReader::with_format(Cursor::new(bytes), kind)
+                .into_dimensions()
+                .map_err(|e| e.to_string())?;
+            if (w as usize).saturating_mul(h as usize) > max_texels {
+                return Err(too_large(w as usize, h as usize));
+            }
+            let mut reader = image::ImageReader::with_format(Cursor::new(bytes), kind);
+            let mut limits = image::Limits::default();
+            // The decoder's own buffers: at most 16 bytes a texel (16-bit RGBA).
+            limits.max_alloc = Some((max_texels as u64).saturating_mul(16));
+            reader.limits(limits);
+            let decoded = reader.decode().map_err(|e| e.to_string())?;
             let rgb = decoded.to_rgb8();
             let (width, height) = (rgb.width() as usize, rgb.height() as usize);
             if width == 0 || height == 0 {
@@ -218,4 +256,25 @@ fn decode_pfm(bytes: &[u8]) -> Result<Image, String> {
             Vec3::splat(floats[i])
         }
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 77-byte PNG whose header claims 2 × 11,403,255 texels (found by the `image` fuzz target; its header's CRC made right, as the fuzz build does not check it).
+    const HUGE_PNG: &[u8] = &[
+        137, 80, 78, 71, 13, 10, 26, 10, 0, 0, 0, 13, 73, 72, 68, 82, 0, 0, 0, 2, 0, 173, 255, 247,
+        8, 2, 0, 0, 0, 27, 245, 170, 180, 0, 0, 42, 19, 73, 68, 65, 84, 120, 156, 99, 8, 2, 0, 0,
+        0, 253, 212, 154, 115, 0, 0, 0, 19, 73, 99, 248, 207, 192, 192, 0, 194, 253, 212, 154, 115,
+        0, 0, 0, 19, 66, 96, 130,
+    ];
+
+    #[test]
+    fn an_image_claiming_more_texels_than_allowed_is_refused_before_it_is_allocated() {
+        let e = decode_linear_within(HUGE_PNG, SceneImageFormat::Png, true, 1 << 18).unwrap_err();
+        assert!(e.contains("claims 2x11403255"), "{e}");
+        // Within the scene limit it is read as far as its data goes, and fails there.
+        assert!(decode_linear(HUGE_PNG, SceneImageFormat::Png, true).is_err());
+    }
 }
