@@ -6,10 +6,9 @@
 mod support;
 
 use dpm::image_metrics::image_relative_mse;
-use dpm::render::pipeline;
 use dpm::scene;
 use std::path::Path;
-use support::{path_str, render_args, write_scene};
+use support::write_scene;
 
 const HEAD: &str = "LookAt 0 3 7  0 0.5 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
     Film \"image\" \"integer xresolution\" 64 \"integer yresolution\" 48\nWorldBegin\n\
@@ -59,26 +58,7 @@ fn flattened(ball: &str) -> String {
 }
 
 fn render(dir: &Path, name: &str, text: &str, seed: &str) -> dpm::image_io::Image {
-    let path = write_scene(dir, name, text);
-    let out = dir.join(format!("{name}.pfm"));
-    let args = [
-        path_str(&path),
-        "-o",
-        path_str(&out),
-        "--threads",
-        "2",
-        "--seed",
-        seed,
-        "--passes",
-        "2",
-        "--caustic-photons",
-        "50000",
-        "--global-photons",
-        "50000",
-    ];
-    pipeline::run(&render_args(&args))
-        .unwrap_or_else(|e| panic!("{e}"))
-        .image
+    support::pbrt::render(dir, name, text, seed, &[])
 }
 
 #[test]
@@ -102,6 +82,36 @@ fn an_instanced_scene_renders_its_flattened_twin() {
     let noise = image_relative_mse(&render(dir.path(), "flat.pbrt", &flattened(ball), "4"), &b);
     let twin = image_relative_mse(&a, &b);
     eprintln!("glass: instanced against flattened {twin:.3e}, seeds apart {noise:.3e}");
+    assert!(
+        twin < 1e-2 * noise,
+        "instanced against flattened {twin:.3e}, seeds apart {noise:.3e}"
+    );
+}
+
+#[test]
+fn textures_and_cutouts_inside_an_object_render_as_in_its_flattened_twin() {
+    let dir = tempfile::tempdir().unwrap();
+    // The wedge textured by a checkerboard over its corners' (u, v), and a cut-out square.
+    let textured = "Texture \"check\" \"color\" \"checkerboard\" \"float uscale\" 4 \"float vscale\" 4 \
+        \"rgb tex1\" [0.9 0.9 0.1] \"rgb tex2\" [0.1 0.2 0.8]\n\
+        Texture \"holes\" \"float\" \"checkerboard\" \"float uscale\" 3 \"float vscale\" 3\n\
+        Material \"matte\" \"texture Kd\" \"check\"\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3 0 3 4 0 4 1] \
+        \"point3 P\" [0 0.8 0  -0.4 0 -0.4  0.4 0 -0.4  0.4 0 0.4  -0.4 0 0.4] \
+        \"float uv\" [0.5 0.5  0 0  1 0  1 1  0 1]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"texture alpha\" \"holes\" \
+        \"point3 P\" [-0.5 1.2 -0.5  0.5 1.2 -0.5  0.5 1.2 0.5  -0.5 1.2 0.5] \"float uv\" [0 0 1 0 1 1 0 1]\n";
+    let mut instanced = format!("{HEAD}ObjectBegin \"thing\"\n{textured}ObjectEnd\n");
+    let mut flat = HEAD.to_string();
+    for place in PLACEMENTS {
+        instanced += &format!("AttributeBegin\n{place}\nObjectInstance \"thing\"\nAttributeEnd\n");
+        flat += &format!("AttributeBegin\n{place}\n{textured}AttributeEnd\n");
+    }
+    let a = render(dir.path(), "instanced.pbrt", &instanced, "3");
+    let b = render(dir.path(), "flat.pbrt", &flat, "3");
+    let noise = image_relative_mse(&render(dir.path(), "flat.pbrt", &flat, "4"), &b);
+    let twin = image_relative_mse(&a, &b);
+    eprintln!("textured: instanced against flattened {twin:.3e}, seeds apart {noise:.3e}");
     assert!(
         twin < 1e-2 * noise,
         "instanced against flattened {twin:.3e}, seeds apart {noise:.3e}"

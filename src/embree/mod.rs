@@ -1,7 +1,7 @@
 //! The only door to Embree, and the only code in dpm that touches raw pointers: a thin safe
 //! wrapper that owns the device, error reporting, building an immutable scene from triangle
 //! meshes, spheres and instances of other committed scenes (one level, as pbrt's object
-//! instancing allows), single-ray closest-hit and occlusion queries, the Embree version in use,
+//! instancing allows), hit filters that let a geometry turn down hits (alpha cut-outs), single-ray closest-hit and occlusion queries, the Embree version in use,
 //! and the rayon pools (flush-to-zero, a bounded thread count) that trace rays. It runs on one of
 //! two backends, side by side in this folder and chosen at build time: Embree 3 (`embree3.rs` +
 //! `shim3.c`, the default) or Embree 4 (`embree4.rs` + `shim4.c`, feature `embree4`). Each backend
@@ -33,7 +33,7 @@ use std::sync::{Arc, Mutex};
 
 /// dpm's C shim (`shim3.c` / `shim4.c` with `shim_common.h`), built by `build.rs`.
 mod shim {
-    use super::sys::{RTCDevice, RTCRay, RTCRayHit, RTCScene};
+    use super::sys::{RTCDevice, RTCGeometry, RTCRay, RTCRayHit, RTCScene};
     use std::ffi::{c_char, c_int, c_long, c_void};
 
     /// Where the shim forwards Embree's error callback; `struct dpm_error_sink` in C.
@@ -51,6 +51,8 @@ mod shim {
         pub fn dpm_rtc_get_device_error(device: RTCDevice) -> c_int;
         pub fn dpm_rtc_library_version(device: RTCDevice) -> c_long;
         pub fn dpm_rtc_header_version() -> c_int;
+        /// Sets `filter` as the geometry's user data and its intersect and occluded filters.
+        pub fn dpm_rtc_set_hit_filter(geometry: RTCGeometry, filter: *mut c_void);
         #[cfg(test)]
         pub fn dpm_rtc_sizeof_ray() -> usize;
         #[cfg(test)]
@@ -240,6 +242,7 @@ impl Device {
             raw: Some(raw),
             geometries: 0,
             instanced: Vec::new(),
+            filters: Vec::new(),
         })
     }
 }
@@ -257,6 +260,9 @@ pub struct SceneBuilder {
     geometries: u32,
     /// The scenes this one's instances place, kept alive as long as it is.
     instanced: Vec<Arc<Scene>>,
+    /// The hit filters its geometries call, kept alive (and in place) as long as it is.
+    #[allow(clippy::vec_box)] // Embree holds their addresses: a Vec alone would move them.
+    filters: Vec<Box<FilterSlot>>,
 }
 
 impl SceneBuilder {
@@ -297,6 +303,16 @@ impl SceneBuilder {
         positions: &[Vec3],
         triangles: &[[u32; 3]],
     ) -> Result<GeometryId, EmbreeError> {
+        self.add_triangles_then(positions, triangles, |_| {})
+    }
+
+    /// [`Self::add_triangles`], with `finish` called on the geometry before it is committed.
+    fn add_triangles_then(
+        &mut self,
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        finish: impl FnOnce(sys::RTCGeometry),
+    ) -> Result<GeometryId, EmbreeError> {
         if triangles.is_empty() {
             return Err(wrapper_error("a triangle mesh needs at least one triangle"));
         }
@@ -326,8 +342,32 @@ impl SceneBuilder {
                 triangles.len(),
             )?;
             indices.copy_from_slice(triangles);
+            finish(g);
             Ok(())
         })
+    }
+
+    /// [`Self::add_triangles`] with a filter that may turn down any hit on them, for closest
+    /// hits and occlusion alike (an alpha cut-out). Embree may ask about the same hit more than
+    /// once, so `filter` answers the same candidate the same way.
+    pub fn add_filtered_triangles(
+        &mut self,
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        filter: Arc<dyn HitFilter>,
+    ) -> Result<GeometryId, EmbreeError> {
+        let mut slot = Box::new(FilterSlot {
+            accept: accept_candidate,
+            filter,
+        });
+        let user = &mut *slot as *mut FilterSlot as *mut c_void;
+        let id = self.add_triangles_then(positions, triangles, |g| {
+            // SAFETY: live, uncommitted geometry; `user` points at the boxed `#[repr(C)]` slot,
+            // a `dpm_hit_filter`, which the scene keeps in place for as long as it lives.
+            unsafe { shim::dpm_rtc_set_hit_filter(g, user) };
+        })?;
+        self.filters.push(slot);
+        Ok(id)
     }
 
     /// Adds spheres (`RTC_GEOMETRY_TYPE_SPHERE_POINT`): one geometry, primitive `i` is `spheres[i]`.
@@ -417,6 +457,7 @@ impl SceneBuilder {
             raw,
             geometries: self.geometries,
             instanced: std::mem::take(&mut self.instanced),
+            filters: std::mem::take(&mut self.filters),
         };
         scene.device.check()?;
         Ok(scene)
@@ -459,6 +500,9 @@ pub struct Scene {
     geometries: u32,
     /// The scenes this one's instances place (released after this one).
     instanced: Vec<Arc<Scene>>,
+    /// The hit filters its geometries call: only held, and dropped after the scene is released.
+    #[allow(dead_code, clippy::vec_box)] // as in SceneBuilder
+    filters: Vec<Box<FilterSlot>>,
 }
 
 // SAFETY: a committed Embree scene may be traced from any number of threads; nothing mutates it.
@@ -470,6 +514,75 @@ impl Drop for Scene {
         // SAFETY: we own this reference.
         unsafe { sys::rtcReleaseScene(self.raw) };
     }
+}
+
+/// A hit Embree has found and a [`HitFilter`] may turn down: `struct dpm_candidate` in C.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    pub primitive: u32,
+    /// Barycentric coordinates, as in [`Hit`].
+    pub u: f32,
+    pub v: f32,
+    /// The ray, in the space of the scene that holds the geometry (an instanced scene's own).
+    origin: [f32; 3],
+    dir: [f32; 3],
+    /// Distance along the ray, in units of `dir`'s length.
+    pub t: f32,
+    occlusion: c_int,
+}
+
+impl Candidate {
+    pub fn origin(&self) -> Vec3 {
+        Vec3::from_array(self.origin)
+    }
+
+    pub fn dir(&self) -> Vec3 {
+        Vec3::from_array(self.dir)
+    }
+
+    /// Whether an occlusion query asks (a shadow ray), not a closest-hit one.
+    pub fn is_occlusion(&self) -> bool {
+        self.occlusion != 0
+    }
+
+    /// A candidate as Embree would pass it, for testing filters.
+    pub fn new(primitive: u32, u: f32, v: f32, origin: Vec3, dir: Vec3, occlusion: bool) -> Self {
+        Self {
+            primitive,
+            u,
+            v,
+            origin: origin.to_array(),
+            dir: dir.to_array(),
+            t: 1.0,
+            occlusion: c_int::from(occlusion),
+        }
+    }
+}
+
+/// Decides, hit by hit, whether a geometry is there (an alpha cut-out). Embree calls it from
+/// the tracing threads, inside a query: it must be cheap and must not trace rays.
+pub trait HitFilter: Send + Sync {
+    fn accept(&self, candidate: &Candidate) -> bool;
+}
+
+/// What a filtered geometry's user data points at: `struct dpm_hit_filter` in C, then the
+/// filter itself.
+#[repr(C)]
+struct FilterSlot {
+    accept: unsafe extern "C" fn(*mut c_void, *const Candidate) -> c_int,
+    filter: Arc<dyn HitFilter>,
+}
+
+unsafe extern "C" fn accept_candidate(slot: *mut c_void, candidate: *const Candidate) -> c_int {
+    // SAFETY: `slot` is the geometry's user data, a `FilterSlot` its scene keeps in place;
+    // `candidate` is the shim's, live for the call.
+    let (slot, candidate) = unsafe { (&*(slot as *const FilterSlot), &*candidate) };
+    // A panic must not unwind into Embree: the hit then stands.
+    let accept = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        slot.filter.accept(candidate)
+    }));
+    c_int::from(accept.unwrap_or(true))
 }
 
 /// A closest hit.

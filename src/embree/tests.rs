@@ -106,3 +106,82 @@ fn the_rays_rust_allocates_have_the_layout_the_c_compiler_gives_them() {
     // Embree 3.13 and the 4.2 headers agree (4.4's larger `RTCHit` is the shim's business).
     assert_eq!(c, (48, 80, 16, 48));
 }
+
+/// Turns down every hit on primitive 0 (and, for shadow rays only, primitive 1), recording
+/// what it was asked.
+struct Holes {
+    asked: Mutex<Vec<Candidate>>,
+}
+
+impl HitFilter for Holes {
+    fn accept(&self, c: &Candidate) -> bool {
+        self.asked.lock().unwrap().push(*c);
+        !(c.primitive == 0 || (c.primitive == 1 && c.is_occlusion()))
+    }
+}
+
+#[test]
+fn a_hit_filter_turns_hits_down_for_closest_hits_and_occlusion_and_through_instances() {
+    let device = Device::new().unwrap();
+    // Two triangles facing −z: primitive 0 at z = 1, primitive 1 at z = 2; a sphere behind.
+    let p = [
+        Vec3::new(-1.0, -1.0, 1.0),
+        Vec3::new(3.0, -1.0, 1.0),
+        Vec3::new(-1.0, 3.0, 1.0),
+        Vec3::new(-1.0, -1.0, 2.0),
+        Vec3::new(3.0, -1.0, 2.0),
+        Vec3::new(-1.0, 3.0, 2.0),
+    ];
+    let holes = Arc::new(Holes {
+        asked: Mutex::new(Vec::new()),
+    });
+    let build = |builder: &mut SceneBuilder| {
+        builder
+            .add_filtered_triangles(&p, &[[0, 1, 2], [3, 4, 5]], holes.clone())
+            .unwrap();
+        builder
+            .add_spheres(&[(Vec3::new(0.0, 0.0, 10.0), 1.0)])
+            .unwrap();
+    };
+    let mut flat = device.scene_builder().unwrap();
+    build(&mut flat);
+    let flat = flat.commit().unwrap();
+    let mut prototype = device.scene_builder().unwrap();
+    build(&mut prototype);
+    let prototype = Arc::new(prototype.commit().unwrap());
+    let mut top = device.scene_builder().unwrap();
+    let shift = Vec3::new(0.0, 0.0, 100.0);
+    top.add_instance(&prototype, glam::Mat4::from_translation(shift))
+        .unwrap();
+    let placed = top.commit().unwrap();
+    drop(prototype);
+    for (scene, offset) in [(&flat, Vec3::ZERO), (&placed, shift)] {
+        let origin = Vec3::new(0.0, 0.0, -5.0) + offset;
+        // The closest hit skips primitive 0 and stops at primitive 1.
+        let hit = scene
+            .intersect(origin, Vec3::Z, 0.0, f32::INFINITY)
+            .unwrap();
+        assert_eq!((hit.geometry, hit.primitive), (0, 1), "{hit:?}");
+        assert!((hit.t - 7.0).abs() < 1e-4, "{hit:?}");
+        // A shadow ray passes both triangles and is stopped by the sphere only.
+        assert!(!scene.occluded(origin, Vec3::Z, 0.0, 13.0));
+        assert!(scene.occluded(origin, Vec3::Z, 0.0, 15.5));
+    }
+    // The filter saw the hits at their barycentrics, in the instanced scene's own space.
+    let asked = holes.asked.lock().unwrap();
+    let on_first = (asked.iter())
+        .find(|c| c.primitive == 0 && !c.is_occlusion())
+        .unwrap();
+    assert!((on_first.t - 6.0).abs() < 1e-4, "{on_first:?}");
+    assert!((on_first.u - 0.25).abs() < 1e-5 && (on_first.v - 0.25).abs() < 1e-5);
+    assert!(
+        asked
+            .iter()
+            .any(|c| c.origin().z < -4.0 && c.origin().z > -6.0)
+    );
+    assert!(
+        asked
+            .iter()
+            .all(|c| c.origin().z < 0.0 && c.dir() == Vec3::Z)
+    );
+}

@@ -29,7 +29,7 @@ mod validate;
 
 pub use environment::{EnvironmentMap, SphereMapping};
 pub use rules::{InvalidField, check_light, check_material, check_mesh};
-pub use texture::{Texture, TexturedMaterial, TexturedParameter};
+pub use texture::{Cutout, Texture, TexturedMaterial, TexturedParameter};
 
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
@@ -380,6 +380,8 @@ pub struct TriangleMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Indexes [`SceneDescription::materials`].
     pub material: u32,
+    /// Where the mesh is cut away, read at the hit's texture coordinates.
+    pub cutout: Option<Cutout>,
 }
 
 /// A scene error names the file, the line (when known) and the field.

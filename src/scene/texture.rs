@@ -245,6 +245,28 @@ impl Texture {
     }
 }
 
+/// A shape's alpha cut-out (pbrt's float `alpha` and `shadowalpha`): where alpha is 0 the
+/// shape is not there, where it is 1 (or more) it is, and in between it is there for that
+/// fraction of rays (pbrt-v4's stochastic alpha; pbrt-v3 cuts at exactly 0 only, the same on
+/// the binary masks its scenes use). Shadow rays see the product of the two.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cutout {
+    pub alpha: Texture,
+    /// For shadow rays only, as in pbrt-v3.
+    pub shadow_alpha: Option<Texture>,
+}
+
+impl Cutout {
+    /// The fraction of rays that meet the shape at `uv`: closest-hit rays, or shadow rays.
+    pub fn coverage(&self, uv: Vec2, shadow: bool) -> f32 {
+        let alpha = self.alpha.evaluate(uv).x;
+        match (&self.shadow_alpha, shadow) {
+            (Some(s), true) => alpha * s.evaluate(uv).x,
+            _ => alpha,
+        }
+    }
+}
+
 /// Which of a material's parameters a texture gives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TexturedParameter {

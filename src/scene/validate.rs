@@ -386,6 +386,7 @@ pub(crate) fn quad(
         uvs: Some(vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]),
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         material,
+        cutout: None,
     }))
 }
 

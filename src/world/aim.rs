@@ -389,6 +389,7 @@ mod tests {
             uvs: None,
             triangles: triangles.clone(),
             material: 0,
+            cutout: None,
         });
         let ball = Shape::Sphere {
             center: Vec3::new(5.0, 0.0, 0.0),

@@ -146,6 +146,16 @@ impl Instancing {
         self.prototypes[placed.prototype as usize].surfaces[geometry as usize]
     }
 
+    /// The prototype `instance` places, and the world point `position` in its space.
+    #[inline]
+    pub(super) fn in_prototype(&self, instance: u32, position: Vec3) -> (u32, Vec3) {
+        let placed = self.placed(instance);
+        (
+            placed.prototype,
+            placed.to_object.transform_point3(position),
+        )
+    }
+
     /// World-space geometric and shading normals of `hit` (through `instance`) at the world
     /// point `position`.
     #[inline]

@@ -7,6 +7,7 @@
 pub mod aim;
 pub mod aim_grid;
 pub mod aim_guide;
+mod cutout;
 mod hit_normals;
 mod instancing;
 pub mod lights;
@@ -42,6 +43,8 @@ pub struct Interaction {
     pub(crate) geometry: u32,
     pub(crate) primitive: u32,
     pub(crate) barycentric: Vec2,
+    /// The instance the hit went through (`geometry` is then its prototype's), or `u32::MAX`.
+    pub(crate) instance: u32,
 }
 
 impl Interaction {
@@ -83,7 +86,14 @@ fn add_shape(
             )
         }
         Shape::Triangles(mesh) => {
-            builder.add_triangles(&mesh.positions, &mesh.triangles)?;
+            match &mesh.cutout {
+                None => builder.add_triangles(&mesh.positions, &mesh.triangles)?,
+                Some(cutout) => builder.add_filtered_triangles(
+                    &mesh.positions,
+                    &mesh.triangles,
+                    Arc::new(cutout::CutoutFilter::new(mesh, cutout)),
+                )?,
+            };
             let a = mesh.positions.iter().fold(Vec3::MAX, |m, p| m.min(*p));
             let b = mesh.positions.iter().fold(Vec3::MIN, |m, p| m.max(*p));
             let hit_normals = HitNormals::Triangles(TriangleNormals::new(mesh));
@@ -344,8 +354,18 @@ impl World {
 
     /// The texture coordinates at `hit` (zero on geometries without textures).
     pub fn uv_at(&self, hit: &Interaction) -> Vec2 {
-        self.texturing
-            .uv(hit.geometry, hit.primitive, hit.barycentric, hit.position)
+        if hit.instance == u32::MAX {
+            return (self.texturing).uv(hit.geometry, hit.primitive, hit.barycentric, hit.position);
+        }
+        // Through an instance: the prototype's geometry, at the hit's point in its space.
+        let (prototype, local) = self.instancing.in_prototype(hit.instance, hit.position);
+        (self.texturing).prototype_uv(
+            prototype,
+            hit.geometry,
+            hit.primitive,
+            hit.barycentric,
+            local,
+        )
     }
 
     /// Radiance arriving along a ray that leaves the scene along the unit `direction` (the
@@ -437,15 +457,10 @@ impl World {
             geometric_normal,
             shading_normal,
             surface,
-            // A prototype's geometry ids are not the top level's: no texture coordinates there
-            // (the scene readers refuse textured materials inside objects).
-            geometry: if hit.instance.is_some() {
-                u32::MAX
-            } else {
-                hit.geometry
-            },
+            geometry: hit.geometry,
             primitive: hit.primitive,
             barycentric: Vec2::new(hit.u, hit.v),
+            instance: hit.instance.unwrap_or(u32::MAX),
         }
     }
 }

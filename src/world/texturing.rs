@@ -31,6 +31,8 @@ pub(super) struct Texturing {
     /// By Embree geometry id, for the shapes (lights come after them and are never
     /// textured).
     uv: Vec<GeometryUv>,
+    /// By prototype, then by the geometry id in the prototype's own scene.
+    prototype_uv: Vec<Vec<GeometryUv>>,
 }
 
 impl Texturing {
@@ -42,20 +44,30 @@ impl Texturing {
         for t in &description.textured_materials {
             by_material[t.material as usize] = Some(t.clone());
         }
-        let uv = (description.shapes.iter())
-            .map(|shape| match shape {
-                Shape::Sphere {
-                    center, material, ..
-                } if by_material[*material as usize].is_some() => {
-                    GeometryUv::Sphere { center: *center }
-                }
-                Shape::Triangles(mesh) if by_material[mesh.material as usize].is_some() => {
-                    GeometryUv::Triangles(corner_uvs(mesh))
-                }
-                _ => GeometryUv::Untextured,
-            })
+        let uvs = |shapes: &[Shape]| -> Vec<GeometryUv> {
+            (shapes.iter())
+                .map(|shape| match shape {
+                    Shape::Sphere {
+                        center, material, ..
+                    } if by_material[*material as usize].is_some() => {
+                        GeometryUv::Sphere { center: *center }
+                    }
+                    Shape::Triangles(mesh) if by_material[mesh.material as usize].is_some() => {
+                        GeometryUv::Triangles(corner_uvs(mesh))
+                    }
+                    _ => GeometryUv::Untextured,
+                })
+                .collect()
+        };
+        let uv = uvs(&description.shapes);
+        let prototype_uv = (description.prototypes.iter())
+            .map(|p| uvs(&p.shapes))
             .collect();
-        Self { by_material, uv }
+        Self {
+            by_material,
+            uv,
+            prototype_uv,
+        }
     }
 
     /// The textured material of id `material`, if it has textures.
@@ -73,14 +85,38 @@ impl Texturing {
         barycentric: Vec2,
         position: Vec3,
     ) -> Vec2 {
-        match self.uv.get(geometry as usize) {
-            Some(GeometryUv::Triangles(corners)) => {
-                let [t0, t1, t2] = corners[primitive as usize];
-                (1.0 - barycentric.x - barycentric.y) * t0 + barycentric.x * t1 + barycentric.y * t2
-            }
-            Some(GeometryUv::Sphere { center }) => sphere_uv(position - *center),
-            _ => Vec2::ZERO,
+        geometry_uv(
+            self.uv.get(geometry as usize),
+            primitive,
+            barycentric,
+            position,
+        )
+    }
+
+    /// [`Self::uv`] on geometry `geometry` of prototype `prototype`, `local` in its space.
+    pub(super) fn prototype_uv(
+        &self,
+        prototype: u32,
+        geometry: u32,
+        primitive: u32,
+        barycentric: Vec2,
+        local: Vec3,
+    ) -> Vec2 {
+        let uv = self.prototype_uv.get(prototype as usize);
+        let geometry = uv.and_then(|g| g.get(geometry as usize));
+        geometry_uv(geometry, primitive, barycentric, local)
+    }
+}
+
+#[inline]
+fn geometry_uv(uv: Option<&GeometryUv>, primitive: u32, barycentric: Vec2, position: Vec3) -> Vec2 {
+    match uv {
+        Some(GeometryUv::Triangles(corners)) => {
+            let [t0, t1, t2] = corners[primitive as usize];
+            (1.0 - barycentric.x - barycentric.y) * t0 + barycentric.x * t1 + barycentric.y * t2
         }
+        Some(GeometryUv::Sphere { center }) => sphere_uv(position - *center),
+        _ => Vec2::ZERO,
     }
 }
 
@@ -95,7 +131,7 @@ pub fn sphere_uv(local: Vec3) -> Vec2 {
     Vec2::new(phi / TAU, 1.0 - cos_theta.acos() / PI)
 }
 
-fn corner_uvs(mesh: &TriangleMesh) -> Vec<[Vec2; 3]> {
+pub(super) fn corner_uvs(mesh: &TriangleMesh) -> Vec<[Vec2; 3]> {
     match &mesh.uvs {
         Some(uvs) => (mesh.triangles.iter())
             .map(|t| t.map(|i| uvs[i as usize]))

@@ -42,3 +42,35 @@ pub fn spheres(scene: &scene::SceneDescription) -> Vec<(Vec3, f32)> {
 pub fn close(a: Vec3, b: Vec3) -> bool {
     (a - b).length() < 1e-5
 }
+
+/// Renders pbrt `text` (written as `name` in `dir`) with `seed`, two passes of 50k caustic
+/// and 50k global photons on two threads, plus `extra` arguments.
+pub fn render(
+    dir: &Path,
+    name: &str,
+    text: &str,
+    seed: &str,
+    extra: &[&str],
+) -> dpm::image_io::Image {
+    let path = write_scene(dir, name, text);
+    let out = dir.join(format!("{name}.pfm"));
+    let mut args = vec![
+        super::path_str(&path),
+        "-o",
+        super::path_str(&out),
+        "--threads",
+        "2",
+        "--seed",
+        seed,
+        "--passes",
+        "2",
+        "--caustic-photons",
+        "50000",
+        "--global-photons",
+        "50000",
+    ];
+    args.extend_from_slice(extra);
+    dpm::render::pipeline::run(&super::render_args(&args))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .image
+}

@@ -210,6 +210,23 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
             }
         }
     }
+    // Likewise only a scene with cut-outs hashes them (and the texture coordinates they read).
+    let placed = scene.prototypes.iter().flat_map(|p| &p.shapes);
+    for (i, shape) in scene.shapes.iter().chain(placed).enumerate() {
+        if let Shape::Triangles(mesh) = shape
+            && let Some(cutout) = &mesh.cutout
+        {
+            h.u64(i as u64);
+            h.texture(&cutout.alpha);
+            match &cutout.shadow_alpha {
+                Some(t) => h.texture(t),
+                None => h.u32(u32::MAX),
+            }
+            let uvs = mesh.uvs.as_deref().unwrap_or_default();
+            h.u64(uvs.len() as u64);
+            uvs.iter().for_each(|t| h.vec3(t.extend(0.0)));
+        }
+    }
     h.finish()
 }
 

@@ -33,6 +33,7 @@ fn square_mesh(facing_down: bool) -> TriangleMesh {
         uvs: None,
         triangles,
         material: 0,
+        cutout: None,
     }
 }
 
@@ -353,6 +354,7 @@ fn mesh_points_are_drawn_by_area() {
         uvs: None,
         triangles: vec![[0, 1, 2], [3, 4, 5]],
         material: 0,
+        cutout: None,
     };
     let light = source(&Light::Mesh {
         mesh,

@@ -190,6 +190,12 @@ impl Mapper<'_> {
                     power,
                 }
             }
+            Geometry::Triangles(mesh) if mesh.cutout.is_some() => {
+                return Err(shape.item.at.error(
+                    "Shape",
+                    "\"alpha\" on an area light: dpm's emitters are not cut out (cut the mesh instead)",
+                ));
+            }
             Geometry::Triangles(mut mesh) => {
                 // An emitter is flat-shaded, as a TOML mesh light.
                 mesh.normals = None;

@@ -138,19 +138,6 @@ pub(super) fn scene(
         ));
     }
     let instances = instances(&parsed, &prototypes)?;
-    for (object, prototype) in parsed.objects.iter().zip(&prototypes) {
-        let textured = |id: u32| m.textured_materials.iter().any(|t| t.material == id);
-        let uses_texture = prototype.shapes.iter().any(|s| match s {
-            crate::scene::Shape::Sphere { material, .. } => textured(*material),
-            crate::scene::Shape::Triangles(t) => textured(t.material),
-        });
-        if uses_texture {
-            return Err(object.at.error(
-                "ObjectBegin",
-                format!("object \"{}\" has a textured material: textures inside instanced objects are not supported yet", object.name),
-            ));
-        }
-    }
     if shapes.is_empty() && instances.is_empty() {
         return Err(first().error("Shape", "the scene has no shapes besides its lights"));
     }

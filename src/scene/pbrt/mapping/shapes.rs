@@ -2,13 +2,16 @@
 //! planar `bilinearmesh` patches become world-space triangle meshes wound so that their
 //! geometric normal is pbrt's (the side a glass is entered from, an area light emits to);
 //! full `sphere`s become spheres; the quadrics, partial spheres, `loopsubdiv` and
-//! `heightfield` are tessellated ([`super::tessellated`]) and placed here like a mesh.
+//! `heightfield` are tessellated ([`super::tessellated`]) and placed here like a mesh; a
+//! shape's `alpha`/`shadowalpha` becomes its mesh's [`Cutout`] (a cut sphere is tessellated).
 //! Curves and NURBS are refused. Owns placing shapes; must not choose materials.
 
 use super::super::parser::{Item, ShapeItem};
 use super::tessellated::SphereCut;
+use super::textures::TextureType;
 use super::{Mapper, param_error, require, value_error};
-use crate::scene::{SceneError, Shape, TriangleMesh, ply, rules};
+use crate::scene::tessellate::quadrics::Quadric;
+use crate::scene::{Cutout, SceneError, Shape, Texture, TriangleMesh, ply, rules};
 use glam::{Mat3, Vec2, Vec3};
 
 /// A bilinear patch whose fourth corner is further than this (relative to its size) from
@@ -51,18 +54,58 @@ impl Mapper<'_> {
 
     pub(in super::super) fn geometry(&mut self, shape: &ShapeItem) -> Result<Geometry, SceneError> {
         let item = &shape.item;
-        let p = |e| param_error("Shape", e);
-        if let Some(alpha) = item.params.float("alpha").map_err(p)?
-            && alpha != 1.0
-        {
-            return Err(value_error(
-                item,
-                "Shape",
-                "alpha",
-                format!("alpha {alpha}: cut-outs are not supported"),
-            ));
+        let cutout = self.cutout(item)?;
+        let geometry = self.uncut_geometry(shape, cutout.is_some())?;
+        Ok(match (geometry, cutout) {
+            (Geometry::Triangles(mut mesh), Some(cutout)) => {
+                mesh.cutout = Some(cutout);
+                Geometry::Triangles(mesh)
+            }
+            (geometry, _) => geometry,
+        })
+    }
+
+    /// The shape's `alpha` and `shadowalpha` (float textures or constants), `None` when the
+    /// shape is opaque throughout.
+    fn cutout(&self, item: &Item) -> Result<Option<Cutout>, SceneError> {
+        let read = |name: &str| -> Result<Option<Texture>, SceneError> {
+            let texture =
+                self.parameter_if_given(&item.params, "Shape", name, TextureType::Float)?;
+            match texture.as_ref().and_then(Texture::as_constant) {
+                Some(c) if !c.x.is_finite() => Err(value_error(
+                    item,
+                    "Shape",
+                    name,
+                    format!("{name} {} is not a number in [0, 1]", c.x),
+                )),
+                Some(c) if c.x >= 1.0 => Ok(None),
+                _ => Ok(texture),
+            }
+        };
+        let (alpha, shadow_alpha) = (read("alpha")?, read("shadowalpha")?);
+        if alpha.is_none() && shadow_alpha.is_none() {
+            return Ok(None);
         }
+        Ok(Some(Cutout {
+            alpha: alpha.unwrap_or(Texture::Constant(Vec3::ONE)),
+            shadow_alpha,
+        }))
+    }
+
+    /// The shape's geometry without its cut-out; a sphere that will be cut is tessellated, for
+    /// its triangles' texture coordinates.
+    fn uncut_geometry(&mut self, shape: &ShapeItem, cut: bool) -> Result<Geometry, SceneError> {
+        let item = &shape.item;
+        let p = |e| param_error("Shape", e);
         match item.kind.as_str() {
+            "sphere" if cut => match self.sphere_cut(item)? {
+                SphereCut::Partial(quadric) => self.placed_quadric(shape, quadric),
+                SphereCut::Full => {
+                    let r = f64::from(item.params.float("radius").map_err(p)?.unwrap_or(1.0));
+                    let sphere = Quadric::Sphere { radius: r, z_min: -r, z_max: r, phi_max: std::f64::consts::TAU };
+                    self.placed_quadric(shape, sphere)
+                }
+            },
             "sphere" => self.sphere(shape),
             "trianglemesh" => {
                 let positions = require(item.params.vec3s("P"), item, "P", "Shape")?;
@@ -254,6 +297,7 @@ impl Mapper<'_> {
             uvs,
             triangles: kept,
             material: 0,
+            cutout: None,
         }))
     }
 }
