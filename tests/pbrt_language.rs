@@ -154,6 +154,28 @@ fn media_are_ignored_with_one_warning_naming_them() {
     assert!(w.contains("and 1 more"), "{w}");
 }
 
+#[test]
+fn a_shape_that_only_bounds_a_medium_is_left_out_with_a_warning_and_refused_under_strict() {
+    let body = "Shape \"sphere\" \"float radius\" 0.3\nAttributeBegin\nMaterial \"\"\n\
+        MediumInterface \"smoke\" \"\"\nTranslate 0 1 0\nShape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n\
+        AttributeBegin\nMaterial \"interface\"\nShape \"sphere\"\nAttributeEnd\n";
+    let (scene, report) = loads(&world(body));
+    assert_eq!(scene.shapes.len(), 1, "the medium boundaries are not there");
+    let left_out: Vec<_> = (report.warnings.iter())
+        .filter(|w| w.contains("medium-boundary"))
+        .collect();
+    assert_eq!(left_out.len(), 1, "{:?}", report.warnings);
+    assert!(left_out[0].contains("scene.pbrt:") && left_out[0].contains("2 shape(s)"));
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_scene(dir.path(), "scene.pbrt", &world(body));
+    let strict = scene::LoadOptions { strict: true };
+    let e = scene::load_with_options(&path, &strict).unwrap_err();
+    assert!(
+        e.to_string().contains("participating medium") && e.line.is_some(),
+        "{e}"
+    );
+}
+
 /// Linear sRGB of a peak-normalised black body at `kelvin`.
 fn blackbody_rgb(kelvin: f64) -> Vec3 {
     spectrum::xyz_to_linear_srgb(spectrum::blackbody_xyz(kelvin)).as_vec3()

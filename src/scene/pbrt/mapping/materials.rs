@@ -214,15 +214,25 @@ impl Mapper<'_> {
             "uber" | "plastic" | "translucent" => diffuse_part("Kd", 0.25)?,
             "substrate" => diffuse_part("Kd", 0.5)?,
             "coateddiffuse" => diffuse_part("reflectance", 0.5)?,
-            "mix"
-            | "hair"
-            | "measured"
-            | "subsurface"
-            | "kdsubsurface"
-            | "fourier"
-            | "disney"
-            | "coatedconductor"
-            | "diffusetransmission" => {
+            "fourier" | "measured" => {
+                return Err(at.error(
+                    "Material",
+                    format!("material \"{kind}\" is a measured BSDF (tabulated data), which dpm does not render; give the object an analytic material"),
+                ));
+            }
+            "hair" => {
+                return Err(at.error(
+                    "Material",
+                    "material \"hair\" (pbrt's hair scattering model) is not supported; give the curves a diffuse material",
+                ));
+            }
+            "subsurface" | "kdsubsurface" => {
+                return Err(at.error(
+                    "Material",
+                    format!("material \"{kind}\" scatters light in a participating medium under the surface, and dpm has no media; use glass or a diffuse material"),
+                ));
+            }
+            "mix" | "disney" | "coatedconductor" | "diffusetransmission" => {
                 return Err(at.error(
                     "Material",
                     format!("material \"{kind}\" has no part dpm can render (dpm has diffuse, mirror and glass)"),

@@ -100,7 +100,26 @@ pub(super) fn scene(
             shapes: Vec::new(),
         })
         .collect();
+    // Shapes that only bound a participating medium (pbrt's `interface` material): without
+    // media they are not there at all (pbrt passes rays through them), so they are left out.
+    let mut medium_boundaries = Vec::new();
     for shape in &parsed.shapes {
+        if shape.area_light.is_none()
+            && let Some(i) = shape.material
+            && matches!(
+                parsed.materials[i].1.kind.as_str(),
+                "interface" | "" | "none"
+            )
+        {
+            if m.strict {
+                return Err(shape.item.at.error(
+                    "Shape",
+                    "the shape bounds a participating medium (material \"\"), and dpm has no media (refused under --strict)",
+                ));
+            }
+            medium_boundaries.push(shape.item.at.clone());
+            continue;
+        }
         if let Some(object) = shape.object {
             if shape.area_light.is_some() {
                 m.warn(
@@ -125,6 +144,13 @@ pub(super) fn scene(
             }
         }
         m.unused(&shape.item, "Shape");
+    }
+    if let Some(at) = medium_boundaries.first() {
+        let n = medium_boundaries.len();
+        m.warn(
+            at,
+            format!("{n} shape(s) with the medium-boundary material \"\" left out: they only bound participating media, which dpm does not render, so the media inside them are missing from the image"),
+        );
     }
     let first = || Place {
         file: path.to_path_buf(),
