@@ -1,7 +1,7 @@
 //! What the parsed pbrt directives become in dpm: the film ([`film`]: resolution, crop window
 //! and what pbrt does to the written image), the camera ([`camera`]), the lights (pbrt gives intensity or radiance,
 //! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`], the tessellated ones in
-//! [`tessellated`]).
+//! [`tessellated`], curves in [`curves`]).
 //! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
 //! Owns the mapping; must not parse text.
 
@@ -140,10 +140,7 @@ pub(super) fn scene(
     let instances = instances(&parsed, &prototypes)?;
     for (object, prototype) in parsed.objects.iter().zip(&prototypes) {
         let textured = |id: u32| m.textured_materials.iter().any(|t| t.material == id);
-        let uses_texture = prototype.shapes.iter().any(|s| match s {
-            crate::scene::Shape::Sphere { material, .. } => textured(*material),
-            crate::scene::Shape::Triangles(t) => textured(t.material),
-        });
+        let uses_texture = prototype.shapes.iter().any(|s| textured(s.material()));
         if uses_texture {
             return Err(object.at.error(
                 "ObjectBegin",
