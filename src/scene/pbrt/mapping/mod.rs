@@ -6,6 +6,7 @@
 //! Owns the mapping; must not parse text.
 
 mod camera;
+mod curves;
 mod environment;
 mod film;
 mod lights;

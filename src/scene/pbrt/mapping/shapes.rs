@@ -2,13 +2,14 @@
 //! planar `bilinearmesh` patches become world-space triangle meshes wound so that their
 //! geometric normal is pbrt's (the side a glass is entered from, an area light emits to);
 //! full `sphere`s become spheres; the quadrics, partial spheres, `loopsubdiv` and
-//! `heightfield` are tessellated ([`super::tessellated`]) and placed here like a mesh.
-//! Curves and NURBS are refused. Owns placing shapes; must not choose materials.
+//! `heightfield` are tessellated ([`super::tessellated`]) and placed here like a mesh;
+//! `curve`s become Bézier curves ([`super::curves`]). NURBS are refused. Owns placing
+//! shapes; must not choose materials.
 
 use super::super::parser::{Item, ShapeItem};
 use super::tessellated::SphereCut;
 use super::{Mapper, param_error, require, value_error};
-use crate::scene::{SceneError, Shape, TriangleMesh, ply, rules};
+use crate::scene::{Curves, SceneError, Shape, TriangleMesh, ply, rules};
 use glam::{Mat3, Vec2, Vec3};
 
 /// A bilinear patch whose fourth corner is further than this (relative to its size) from
@@ -28,6 +29,7 @@ pub(super) struct MeshData {
 pub(in super::super) enum Geometry {
     Sphere { center: Vec3, radius: f32 },
     Triangles(TriangleMesh),
+    Curves(Curves),
 }
 
 impl Mapper<'_> {
@@ -45,6 +47,10 @@ impl Mapper<'_> {
             Geometry::Triangles(mut mesh) => {
                 mesh.material = material;
                 vec![Shape::Triangles(mesh)]
+            }
+            Geometry::Curves(mut curves) => {
+                curves.material = material;
+                vec![Shape::Curves(curves)]
             }
         })
     }
@@ -139,9 +145,10 @@ impl Mapper<'_> {
             "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" => self.quadric(shape),
             "loopsubdiv" => self.loop_subdivision(shape),
             "heightfield" => self.heightfield(shape),
-            "curve" | "nurbs" => Err(item.at.error(
+            "curve" => self.curve(shape),
+            "nurbs" => Err(item.at.error(
                 "Shape",
-                format!("shape \"{}\" is not supported: dpm renders triangle meshes, spheres and the quadrics (convert it to a trianglemesh or plymesh)", item.kind),
+                "shape \"nurbs\" is not supported: dpm renders triangle meshes, spheres, the quadrics and curves (convert it to a trianglemesh or plymesh)",
             )),
             other => Err(item.at.error("Shape", format!("\"{other}\" is not a pbrt shape"))),
         }
