@@ -29,7 +29,7 @@ fn meshes(scene: &SceneDescription) -> Vec<&TriangleMesh> {
         .iter()
         .filter_map(|s| match s {
             Shape::Triangles(mesh) => Some(mesh),
-            Shape::Sphere { .. } => None,
+            Shape::Sphere { .. } | Shape::Curves(_) => None,
         })
         .collect()
 }

@@ -23,10 +23,16 @@ pub(super) const NAME: &str = "Embree 3";
 pub(super) const TRIANGLE: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_TRIANGLE;
 pub(super) const SPHERE_POINT: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_SPHERE_POINT;
 pub(super) const INSTANCE: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_INSTANCE;
+pub(super) const FLAT_BEZIER_CURVE: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE;
+pub(super) const ROUND_BEZIER_CURVE: b::RTCGeometryType = b::RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE;
+pub(super) const NORMAL_ORIENTED_BEZIER_CURVE: b::RTCGeometryType =
+    b::RTC_GEOMETRY_TYPE_NORMAL_ORIENTED_BEZIER_CURVE;
 pub(super) const VERTEX: b::RTCBufferType = b::RTC_BUFFER_TYPE_VERTEX;
 pub(super) const INDEX: b::RTCBufferType = b::RTC_BUFFER_TYPE_INDEX;
+pub(super) const NORMAL: b::RTCBufferType = b::RTC_BUFFER_TYPE_NORMAL;
 pub(super) const FLOAT3: b::RTCFormat = b::RTC_FORMAT_FLOAT3;
 pub(super) const FLOAT4: b::RTCFormat = b::RTC_FORMAT_FLOAT4;
+pub(super) const UINT: b::RTCFormat = b::RTC_FORMAT_UINT;
 pub(super) const UINT3: b::RTCFormat = b::RTC_FORMAT_UINT3;
 pub(super) const FLOAT3X4_COLUMN_MAJOR: b::RTCFormat = b::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR;
 

@@ -15,10 +15,16 @@ pub(super) const NAME: &str = "Embree 4";
 pub(super) const TRIANGLE: b::RTCGeometryType = b::RTCGeometryType::TRIANGLE;
 pub(super) const SPHERE_POINT: b::RTCGeometryType = b::RTCGeometryType::SPHERE_POINT;
 pub(super) const INSTANCE: b::RTCGeometryType = b::RTCGeometryType::INSTANCE;
+pub(super) const FLAT_BEZIER_CURVE: b::RTCGeometryType = b::RTCGeometryType::FLAT_BEZIER_CURVE;
+pub(super) const ROUND_BEZIER_CURVE: b::RTCGeometryType = b::RTCGeometryType::ROUND_BEZIER_CURVE;
+pub(super) const NORMAL_ORIENTED_BEZIER_CURVE: b::RTCGeometryType =
+    b::RTCGeometryType::NORMAL_ORIENTED_BEZIER_CURVE;
 pub(super) const VERTEX: b::RTCBufferType = b::RTCBufferType::VERTEX;
 pub(super) const INDEX: b::RTCBufferType = b::RTCBufferType::INDEX;
+pub(super) const NORMAL: b::RTCBufferType = b::RTCBufferType::NORMAL;
 pub(super) const FLOAT3: b::RTCFormat = b::RTCFormat::FLOAT3;
 pub(super) const FLOAT4: b::RTCFormat = b::RTCFormat::FLOAT4;
+pub(super) const UINT: b::RTCFormat = b::RTCFormat::UINT;
 pub(super) const UINT3: b::RTCFormat = b::RTCFormat::UINT3;
 pub(super) const FLOAT3X4_COLUMN_MAJOR: b::RTCFormat = b::RTCFormat::FLOAT3X4_COLUMN_MAJOR;
 

@@ -1,7 +1,8 @@
 //! The only door to Embree, and the only code in dpm that touches raw pointers: a thin safe
 //! wrapper that owns the device, error reporting, building an immutable scene from triangle
-//! meshes, spheres and instances of other committed scenes (one level, as pbrt's object
-//! instancing allows), hit filters that let a geometry turn down hits (alpha cut-outs), single-ray closest-hit and occlusion queries, the Embree version in use,
+//! meshes, spheres, cubic Bézier curves (`curves.rs`) and instances of other committed scenes
+//! (one level, as pbrt's object instancing allows), hit filters that let a geometry turn down
+//! hits (alpha cut-outs), single-ray closest-hit and occlusion queries, the Embree version in use,
 //! and the rayon pools (flush-to-zero, a bounded thread count) that trace rays. It runs on one of
 //! two backends, side by side in this folder and chosen at build time: Embree 3 (`embree3.rs` +
 //! `shim3.c`, the default) or Embree 4 (`embree4.rs` + `shim4.c`, feature `embree4`). Each backend
@@ -10,9 +11,11 @@
 //! is re-typed in Rust. Nothing outside this folder knows which backend it runs on. It knows
 //! nothing of materials, lights or photons, and must not: it never reads a scene description.
 
+mod curves;
 mod threads;
 mod version;
 
+pub use curves::{CurveKind, FLAT_CURVE_QUADS};
 pub use threads::{
     MAX_THREADS, ThreadPoolError, enable_flush_to_zero, flush_to_zero_enabled, thread_pool,
 };
@@ -596,11 +599,13 @@ pub struct Hit {
     pub primitive: u32,
     /// The instance geometry (of the top-level scene) the hit went through, if any.
     pub instance: Option<GeometryId>,
-    /// Barycentric coordinates of the hit (triangles: weights of vertices 1 and 2).
+    /// Where on the primitive the hit lies: for triangles the barycentric weights of
+    /// vertices 1 and 2; for curves the parameter along the segment (0 to 1) and the place
+    /// across it ([`CurveKind`] says in what range).
     pub u: f32,
     pub v: f32,
     /// Geometric normal, unnormalised, as Embree reports it (in the instanced scene's space for
-    /// a hit through an instance).
+    /// a hit through an instance); for a flat curve, its tangent.
     pub normal: Vec3,
 }
 

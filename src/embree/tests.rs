@@ -1,5 +1,6 @@
 //! The wrapper checked against Embree itself: errors surface, the ray layouts agree with the
-//! C compiler's, and instances place their scenes.
+//! C compiler's, instances place their scenes, hit filters turn hits down, and curves are met
+//! where their geometry says.
 
 use super::*;
 
@@ -184,4 +185,165 @@ fn a_hit_filter_turns_hits_down_for_closest_hits_and_occlusion_and_through_insta
             .iter()
             .all(|c| c.origin().z < 0.0 && c.dir() == Vec3::Z)
     );
+}
+
+/// Four collinear control points from (−2, 0, 0) to (2, 0, 0): a straight segment along x, each
+/// point with `radius`.
+fn straight_segment(radius: f32) -> [[f32; 4]; 4] {
+    [-2.0, -2.0 / 3.0, 2.0 / 3.0, 2.0].map(|x| [x, 0.0, 0.0, radius])
+}
+
+/// A scene of one curve geometry: the straight segment of radius 0.5 (normals +z for a
+/// normal-oriented one).
+fn one_curve(device: &Device, kind: CurveKind) -> Scene {
+    let mut builder = device.scene_builder().unwrap();
+    let normals = [Vec3::Z; 4];
+    let normals = (kind == CurveKind::NormalOriented).then_some(&normals[..]);
+    builder
+        .add_curves(kind, &straight_segment(0.5), &[0], normals)
+        .unwrap();
+    builder.commit().unwrap()
+}
+
+#[test]
+fn a_ray_through_a_round_curve_s_axis_meets_it_a_radius_short_of_the_axis() {
+    let device = Device::new().unwrap();
+    let scene = one_curve(&device, CurveKind::Round);
+    let hit = |o: Vec3, d: Vec3| scene.intersect(o, d, 0.0, f32::INFINITY);
+    // Through the axis at x = 0.5: the tube's side at z = −0.5, 4.5 along the ray.
+    let h = hit(Vec3::new(0.5, 0.0, -5.0), Vec3::Z).unwrap();
+    assert!((h.t - 4.5).abs() < 1e-4, "{h:?}");
+    assert_eq!((h.geometry, h.primitive, h.instance), (0, 0, None));
+    assert!((h.u - 0.625).abs() < 1e-4, "{h:?}");
+    // The normal is the surface's, outward (towards the ray's origin).
+    assert!(h.normal.normalize().dot(-Vec3::Z) > 0.9999, "{h:?}");
+    // Off the axis by 0.4: the circle of radius 0.5 is 0.3 deep there.
+    let h = hit(Vec3::new(-1.0, 0.4, -5.0), Vec3::Z).unwrap();
+    assert!((h.t - 4.7).abs() < 1e-4, "{h:?}");
+    let n = h.normal.normalize();
+    assert!((n - Vec3::new(0.0, 0.8, -0.6)).length() < 1e-3, "{h:?}");
+    // Beside it, and past its end, rays miss; from inside, the tube is met on its way out.
+    assert!(hit(Vec3::new(0.5, 0.55, -5.0), Vec3::Z).is_none());
+    assert!(hit(Vec3::new(2.2, 0.0, -5.0), Vec3::Z).is_none());
+    assert!(!scene.occluded(Vec3::new(0.5, 0.55, -5.0), Vec3::Z, 0.0, f32::INFINITY));
+    let h = hit(Vec3::new(0.5, 0.0, 0.0), Vec3::Y).unwrap();
+    assert!(
+        (h.t - 0.5).abs() < 1e-4 && h.normal.dot(Vec3::Y) > 0.0,
+        "{h:?}"
+    );
+}
+
+#[test]
+fn a_flat_curve_faces_every_ray_and_reports_its_tangent() {
+    let device = Device::new().unwrap();
+    let scene = one_curve(&device, CurveKind::Flat);
+    let centre = Vec3::new(0.3, 0.0, 0.0);
+    // Rays at the axis from all round it (and slanted along it) meet the band at the axis.
+    for k in 0..12 {
+        let angle = k as f32 * std::f32::consts::TAU / 12.0;
+        let across = Vec3::new(0.0, angle.cos(), angle.sin());
+        for slant in [0.0, 0.5] {
+            let d = (-across + Vec3::new(slant, 0.0, 0.0)).normalize();
+            let o = centre - 5.0 * d;
+            let h = scene.intersect(o, d, 0.0, f32::INFINITY);
+            let h = h.unwrap_or_else(|| panic!("missed from {o}"));
+            assert!((h.t - 5.0).abs() < 1e-3, "{h:?} from {o}");
+            assert!(h.normal.normalize().dot(Vec3::X) > 0.9999, "{h:?}");
+            // Within the radius of the axis the band is there; beyond it, not.
+            let side = across.cross(Vec3::X).normalize();
+            let near = scene.intersect(o + 0.45 * side, d, 0.0, f32::INFINITY);
+            assert!(near.is_some_and(|h| h.v.abs() > 0.85), "{near:?}");
+            assert!(
+                scene
+                    .intersect(o + 0.55 * side, d, 0.0, f32::INFINITY)
+                    .is_none()
+            );
+        }
+    }
+}
+
+#[test]
+fn a_normal_oriented_curve_is_a_band_across_its_normals() {
+    let device = Device::new().unwrap();
+    let scene = one_curve(&device, CurveKind::NormalOriented);
+    let hit = |o: Vec3, d: Vec3| scene.intersect(o, d, 0.0, f32::INFINITY);
+    // Normals +z: the band lies in z = 0, from y = −0.5 to 0.5, v from 0 to 1 across it.
+    let h = hit(Vec3::new(0.5, 0.4, -5.0), Vec3::Z).unwrap();
+    assert!(
+        (h.t - 5.0).abs() < 1e-4 && (h.v - 0.9).abs() < 1e-3,
+        "{h:?}"
+    );
+    assert!(h.normal.normalize().dot(Vec3::Z).abs() > 0.9999, "{h:?}");
+    assert!(hit(Vec3::new(0.5, 0.6, -5.0), Vec3::Z).is_none());
+    // Slanted, it is still met in its plane; edge on, it is not there.
+    let d = Vec3::new(0.0, 1.0, 1.0).normalize();
+    let h = hit(Vec3::new(0.5, -3.0, -3.0), d).unwrap();
+    assert!((h.t - 3.0 * 2f32.sqrt()).abs() < 1e-3, "{h:?}");
+    assert!(hit(Vec3::new(0.5, -5.0, 0.2), Vec3::Y).is_none());
+}
+
+#[test]
+fn curves_hit_through_an_instance_report_the_instance() {
+    let device = Device::new().unwrap();
+    let prototype = Arc::new(one_curve(&device, CurveKind::Round));
+    let mut top = device.scene_builder().unwrap();
+    top.add_spheres(&[(Vec3::new(0.0, 0.0, 30.0), 1.0)])
+        .unwrap();
+    // Twice as large, 3 up.
+    let m = glam::Mat4::from_translation(Vec3::new(0.0, 3.0, 0.0))
+        * glam::Mat4::from_scale(Vec3::splat(2.0));
+    let instance = top.add_instance(&prototype, m).unwrap();
+    let scene = top.commit().unwrap();
+    let h = scene
+        .intersect(Vec3::new(1.0, 3.0, -10.0), Vec3::Z, 0.0, f32::INFINITY)
+        .unwrap();
+    // The tube (radius 1 now) is met at z = −1.
+    assert!((h.t - 9.0).abs() < 1e-3, "{h:?}");
+    assert_eq!(
+        (h.instance, h.geometry, h.primitive),
+        (Some(instance), 0, 0)
+    );
+    assert!(scene.occluded(Vec3::new(1.0, 3.0, -10.0), Vec3::Z, 0.0, 9.1));
+    assert!(!scene.occluded(Vec3::new(1.0, 3.0, -10.0), Vec3::Z, 0.0, 8.9));
+    assert!(
+        scene
+            .intersect(Vec3::new(1.0, 4.2, -10.0), Vec3::Z, 0.0, f32::INFINITY)
+            .is_none()
+    );
+}
+
+#[test]
+fn malformed_curves_are_refused_before_embree_sees_them() {
+    let device = Device::new().unwrap();
+    let mut builder = device.scene_builder().unwrap();
+    let good = straight_segment(0.5);
+    let mut bad = |kind, points: &[[f32; 4]], first: &[u32], normals: Option<&[Vec3]>| {
+        let err = builder
+            .add_curves(kind, points, first, normals)
+            .unwrap_err();
+        assert_eq!(err.code, ErrorCode::Wrapper, "{err}");
+        err.message
+    };
+    let mut not_finite = good;
+    not_finite[1][2] = f32::NAN;
+    let mut negative = good;
+    negative[2][3] = -0.1;
+    let flat = CurveKind::Flat;
+    assert!(bad(flat, &good, &[], None).contains("at least one segment"));
+    assert!(bad(flat, &not_finite, &[0], None).contains("not finite"));
+    assert!(bad(flat, &negative, &[0], None).contains("negative radius"));
+    assert!(bad(flat, &good, &[1], None).contains("run past 4"));
+    assert!(bad(flat, &straight_segment(0.0), &[0], None).contains("no radius"));
+    let normals = [Vec3::Z; 4];
+    let oriented = CurveKind::NormalOriented;
+    assert!(bad(oriented, &good, &[0], None).contains("needs a normal"));
+    assert!(bad(oriented, &good, &[0], Some(&normals[..3])).contains("3 curve normals"));
+    let zero = [Vec3::Z, Vec3::ZERO, Vec3::Z, Vec3::Z];
+    assert!(bad(oriented, &good, &[0], Some(&zero)).contains("zero"));
+    assert!(bad(CurveKind::Round, &good, &[0], Some(&normals)).contains("only normal-oriented"));
+    // A curve tapering to a point is fine, and the builder is still usable.
+    let mut taper = good;
+    taper[3][3] = 0.0;
+    builder.add_curves(flat, &taper, &[0], None).unwrap();
+    builder.commit().unwrap();
 }

@@ -188,13 +188,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let description = &world.description;
     let diffuse = |shapes: &[scene::Shape]| {
         (shapes.iter())
-            .filter(|s| {
-                let m = match s {
-                    scene::Shape::Sphere { material, .. } => *material,
-                    scene::Shape::Triangles(t) => t.material,
-                };
-                matches!(world.material(m), Material::Diffuse { .. })
-            })
+            .filter(|s| matches!(world.material(s.material()), Material::Diffuse { .. }))
             .count()
     };
     // Every placement of a prototype is an object of its own.

@@ -214,25 +214,42 @@ fn summary(scene: &SceneDescription) -> String {
     let triangles = |shapes: &[Shape]| -> usize {
         (shapes.iter())
             .map(|s| match s {
-                Shape::Sphere { .. } => 0,
+                Shape::Sphere { .. } | Shape::Curves(_) => 0,
                 Shape::Triangles(m) => m.triangles.len(),
             })
             .sum()
     };
-    let placed: usize = (scene.instances.iter())
-        .map(|i| triangles(&scene.prototypes[i.prototype as usize].shapes))
-        .sum();
+    let segments = |shapes: &[Shape]| -> usize {
+        (shapes.iter())
+            .map(|s| match s {
+                Shape::Curves(c) => c.segment_count(),
+                Shape::Sphere { .. } | Shape::Triangles(_) => 0,
+            })
+            .sum()
+    };
+    let placed = |count: &dyn Fn(&[Shape]) -> usize| -> usize {
+        (scene.instances.iter())
+            .map(|i| count(&scene.prototypes[i.prototype as usize].shapes))
+            .sum()
+    };
+    // Curve segments are named only in scenes that have some.
+    let curves = |count: usize| match count {
+        0 => String::new(),
+        n => format!(", {n} curve segments"),
+    };
     format!(
-        "{}x{}; lights: {}; {} shapes ({} triangles), {} materials; {} objects placed {} times ({} triangles placed)",
+        "{}x{}; lights: {}; {} shapes ({} triangles{}), {} materials; {} objects placed {} times ({} triangles{} placed)",
         scene.camera.width,
         scene.camera.height,
         lights.join(", "),
         scene.shapes.len(),
         triangles(&scene.shapes),
+        curves(segments(&scene.shapes)),
         scene.materials.len(),
         scene.prototypes.len(),
         scene.instances.len(),
-        placed
+        placed(&triangles),
+        curves(placed(&segments)),
     )
 }
 

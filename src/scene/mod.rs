@@ -10,9 +10,10 @@
 //! the public types, `rules` holds the value rules the public types obey (shared by `validate`
 //! and by [`check_light`] and [`check_material`], for descriptions built in code), `mesh` reads
 //! OBJ/MTL files, `transform` places meshes in the world, `tessellate` turns curved and
-//! subdivision surfaces into triangles in their own space.
+//! subdivision surfaces into triangles in their own space, `curves` holds Bézier curves.
 
 pub mod check;
+mod curves;
 mod document;
 pub mod environment;
 pub mod files;
@@ -27,6 +28,7 @@ mod toml_texture;
 pub(crate) mod transform;
 mod validate;
 
+pub use curves::{CurveKind, Curves, check_curves};
 pub use environment::{EnvironmentMap, SphereMapping};
 pub use rules::{InvalidField, check_light, check_material, check_mesh};
 pub use texture::{Cutout, Texture, TexturedMaterial, TexturedParameter};
@@ -348,6 +350,18 @@ pub enum Shape {
         material: u32,
     },
     Triangles(TriangleMesh),
+    Curves(Curves),
+}
+
+impl Shape {
+    /// The shape's material: an index into [`SceneDescription::materials`].
+    pub fn material(&self) -> u32 {
+        match self {
+            Shape::Sphere { material, .. } => *material,
+            Shape::Triangles(mesh) => mesh.material,
+            Shape::Curves(curves) => curves.material,
+        }
+    }
 }
 
 /// Shapes defined once in a space of their own and placed any number of times (pbrt's

@@ -508,7 +508,8 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
             if inside(at) {
                 let what = match shape {
                     Shape::Sphere { .. } => "an opaque sphere",
-                    Shape::Triangles(_) => "a closed opaque mesh",
+                    // Curves are never closed (a tube is open at its ends).
+                    Shape::Triangles(_) | Shape::Curves(_) => "a closed opaque mesh",
                 };
                 warnings.push(format!(
                     "lights[{l}] is inside {what} (shape {s}) and the camera is outside it: \

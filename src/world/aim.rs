@@ -19,8 +19,8 @@ use glam::Vec3;
 pub const MAX_TARGETS: usize = 8;
 
 /// The spheres to aim caustic photons at, for at most [`MAX_TARGETS`] mirror and glass shapes:
-/// a sphere is its own target, a mesh is split into clusters sharing what is left of the
-/// budget (a power of two each).
+/// a sphere is its own target, curves are aimed at the sphere around their box, a mesh is
+/// split into clusters sharing what is left of the budget (a power of two each).
 pub fn targets(specular: &[&Shape]) -> Vec<BoundingSphere> {
     assert!(specular.len() <= MAX_TARGETS, "too many shapes to aim at");
     let meshes = specular
@@ -42,6 +42,10 @@ pub fn targets(specular: &[&Shape]) -> Vec<BoundingSphere> {
             Shape::Triangles(mesh) => {
                 let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
                 split_mesh(mesh, all, clusters, &mut targets);
+            }
+            Shape::Curves(curves) => {
+                let (lo, hi) = curves.bounds();
+                targets.push(BoundingSphere::around_box(lo, hi));
             }
         }
     }

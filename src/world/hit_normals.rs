@@ -2,6 +2,11 @@
 //! everything resolving a hit reads in one place (not a kind, then the scene's shape or light,
 //! then its normals). Owns the normals' layout and their evaluation at a hit; must not decide
 //! what a surface is.
+//!
+//! A curve keeps nothing: a tube's or a ribbon's normal is the one Embree reports, a flat
+//! curve's (Embree reports its tangent) is the band's that faces the ray. A curve has no
+//! inside (a tube's is open at its ends), and like any open surface it is lit and seen on
+//! whichever side a ray meets it ([`super::Interaction::facing`]).
 
 use crate::embree;
 use crate::scene::TriangleMesh;
@@ -18,6 +23,11 @@ pub(super) enum HitNormals {
     /// One normal for the whole geometry (a quad light's).
     Fixed(Vec3),
     Triangles(TriangleNormals),
+    /// A tube or a ribbon: Embree's geometric normal of the hit.
+    SurfaceCurve,
+    /// A flat curve, which faces every ray: its normal is the ray's direction made
+    /// perpendicular to the curve's tangent (which Embree reports as the hit's normal).
+    FlatCurve,
 }
 
 /// What resolving a hit on a mesh reads, laid out by triangle so that a hit reads one place
@@ -65,9 +75,15 @@ fn unit_within_rounding(v: Vec3) -> Vec3 {
     v * (1.5 - 0.5 * v.length_squared())
 }
 
-/// The geometric and shading normals of `hit` at `position` (both in the geometry's own space).
+/// The geometric and shading normals of `hit` at `position` of a ray along `dir` (all in the
+/// geometry's own space).
 #[inline(always)]
-pub(super) fn normals_at(normals: &HitNormals, hit: &embree::Hit, position: Vec3) -> (Vec3, Vec3) {
+pub(super) fn normals_at(
+    normals: &HitNormals,
+    hit: &embree::Hit,
+    position: Vec3,
+    dir: Vec3,
+) -> (Vec3, Vec3) {
     match normals {
         HitNormals::Sphere {
             center,
@@ -86,6 +102,15 @@ pub(super) fn normals_at(normals: &HitNormals, hit: &embree::Hit, position: Vec3
             let s = (1.0 - hit.u - hit.v) * n0 + hit.u * n1 + hit.v * n2;
             let s = s.normalize_or(ng);
             (ng, if s.dot(ng) < 0.0 { -s } else { s })
+        }
+        HitNormals::SurfaceCurve => {
+            let n = hit.normal.normalize_or(-dir);
+            (n, n)
+        }
+        HitNormals::FlatCurve => {
+            let t = hit.normal.normalize_or_zero();
+            let n = (t * dir.dot(t) - dir).normalize_or(-dir);
+            (n, n)
         }
     }
 }

@@ -157,13 +157,20 @@ impl Instancing {
     }
 
     /// World-space geometric and shading normals of `hit` (through `instance`) at the world
-    /// point `position`.
+    /// point `position` of a ray along `dir`.
     #[inline]
-    pub(super) fn normals(&self, instance: u32, hit: &embree::Hit, position: Vec3) -> (Vec3, Vec3) {
+    pub(super) fn normals(
+        &self,
+        instance: u32,
+        hit: &embree::Hit,
+        position: Vec3,
+        dir: Vec3,
+    ) -> (Vec3, Vec3) {
         let placed = self.placed(instance);
         let parts = &self.prototypes[placed.prototype as usize];
         let local = placed.to_object.transform_point3(position);
-        let (ng, ns) = normals_at(&parts.normals[hit.geometry as usize], hit, local);
+        let local_dir = placed.to_object.transform_vector3(dir);
+        let (ng, ns) = normals_at(&parts.normals[hit.geometry as usize], hit, local, local_dir);
         let ng = (placed.normal_to_world * ng).normalize_or(Vec3::Z);
         let ns = (placed.normal_to_world * ns).normalize_or(ng);
         (ng, if ns.dot(ng) < 0.0 { -ns } else { ns })

@@ -14,7 +14,7 @@ pub mod lights;
 pub mod texturing;
 
 use crate::embree::{self, EmbreeError};
-use crate::scene::{Light, Material, SceneDescription, Shape, TriangleMesh};
+use crate::scene::{CurveKind, Light, Material, SceneDescription, Shape, TriangleMesh};
 use glam::{Vec2, Vec3};
 use hit_normals::{HitNormals, TriangleNormals, normals_at, sphere_normals};
 use instancing::Instancing;
@@ -33,13 +33,15 @@ pub enum Surface {
 pub struct Interaction {
     pub t: f32,
     pub position: Vec3,
-    /// Unit geometric normal, oriented by the geometry (outward for spheres, by winding for meshes).
+    /// Unit geometric normal, oriented by the geometry (outward for spheres and tubes, by
+    /// winding for meshes, by the normals for ribbons, towards the ray for flat curves).
     pub geometric_normal: Vec3,
     /// Unit shading normal (interpolated vertex normals), on the geometric normal's side.
     pub shading_normal: Vec3,
     pub surface: Surface,
     /// Where on its geometry the hit lies, for textures: the Embree geometry, the triangle
-    /// and its barycentric weights of corners 1 and 2.
+    /// and its barycentric weights of corners 1 and 2 (a curve: the segment, Embree's u along
+    /// it and v across it; on a textured tube, pbrt's v, which `resolve` works out).
     pub(crate) geometry: u32,
     pub(crate) primitive: u32,
     pub(crate) barycentric: Vec2,
@@ -98,6 +100,19 @@ fn add_shape(
             let b = mesh.positions.iter().fold(Vec3::MIN, |m, p| m.max(*p));
             let hit_normals = HitNormals::Triangles(TriangleNormals::new(mesh));
             (hit_normals, (a, b), mesh.material)
+        }
+        Shape::Curves(curves) => {
+            let (kind, normals) = match curves.kind {
+                CurveKind::Flat => (embree::CurveKind::Flat, HitNormals::FlatCurve),
+                CurveKind::Cylinder => (embree::CurveKind::Round, HitNormals::SurfaceCurve),
+                CurveKind::Ribbon => (embree::CurveKind::NormalOriented, HitNormals::SurfaceCurve),
+            };
+            let points: Vec<[f32; 4]> = (curves.points.iter().zip(&curves.radii))
+                .map(|(p, r)| [p.x, p.y, p.z, *r])
+                .collect();
+            let first: Vec<u32> = (0..curves.segment_count() as u32).map(|k| 4 * k).collect();
+            builder.add_curves(kind, &points, &first, curves.normals.as_deref())?;
+            (normals, curves.bounds(), curves.material)
         }
     })
 }
@@ -448,9 +463,17 @@ impl World {
         } = closest;
         let position = origin + hit.t * dir;
         let (geometric_normal, shading_normal) = match hit.instance {
-            None => normals_at(&self.normals[hit.geometry as usize], &hit, position),
-            Some(instance) => self.instancing.normals(instance, &hit, position),
+            None => normals_at(&self.normals[hit.geometry as usize], &hit, position, dir),
+            Some(instance) => self.instancing.normals(instance, &hit, position, dir),
         };
+        let mut barycentric = Vec2::new(hit.u, hit.v);
+        if self.texturing.has_tubes
+            && hit.instance.is_none()
+            && let Some(v) =
+                (self.texturing).tube_v(hit.geometry, hit.primitive, hit.u, geometric_normal, dir)
+        {
+            barycentric.y = v;
+        }
         Interaction {
             t: hit.t,
             position,
@@ -459,7 +482,7 @@ impl World {
             surface,
             geometry: hit.geometry,
             primitive: hit.primitive,
-            barycentric: Vec2::new(hit.u, hit.v),
+            barycentric,
             instance: hit.instance.unwrap_or(u32::MAX),
         }
     }

@@ -1,11 +1,11 @@
 //! Textured materials at a hit: each geometry's texture coordinates, laid out for resolving a
 //! hit's (u, v), and the textured materials by material id. Owns turning a hit into (u, v) —
 //! barycentric interpolation of a triangle's corners, pbrt's parametric (φ/2π, 1 − θ/π) on
-//! a sphere — and a material's values there. Built only for geometries whose material has
+//! a sphere, pbrt's (along, across) on a curve — and a material's values there. Built only for geometries whose material has
 //! textures, so a scene without textures carries nothing here and takes no extra work. Must
 //! not trace rays.
 
-use crate::scene::{SceneDescription, Shape, TexturedMaterial, TriangleMesh};
+use crate::scene::{CurveKind, SceneDescription, Shape, TexturedMaterial, TriangleMesh};
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -21,6 +21,14 @@ enum GeometryUv {
     /// A sphere's parametric (u, v) about its centre, in the world frame (dpm's spheres keep
     /// no object frame: pbrt's would turn with the sphere's transform).
     Sphere { center: Vec3 },
+    /// A flat curve or a ribbon: u is Embree's parameter along the segment (pbrt's u, 0 to 1
+    /// on each segment of a pbrt curve), v across it is Embree's mapped to pbrt's 0 to 1 (from
+    /// −1 to 1 on a flat curve, already 0 to 1 on a ribbon).
+    Band(CurveKind),
+    /// A cylinder curve: u as on a band; Embree's hits on a tube carry no v, so the hit's v
+    /// is pbrt's, worked out when the hit is resolved ([`Texturing::tube_v`]) from each
+    /// segment's control points.
+    Tube(Vec<[Vec3; 4]>),
 }
 
 /// Everything evaluating textures at a hit reads.
@@ -33,6 +41,8 @@ pub(super) struct Texturing {
     uv: Vec<GeometryUv>,
     /// By prototype, then by the geometry id in the prototype's own scene.
     prototype_uv: Vec<Vec<GeometryUv>>,
+    /// Whether any textured geometry is a tube, whose hits need [`Texturing::tube_v`].
+    pub(super) has_tubes: bool,
 }
 
 impl Texturing {
@@ -55,6 +65,16 @@ impl Texturing {
                     Shape::Triangles(mesh) if by_material[mesh.material as usize].is_some() => {
                         GeometryUv::Triangles(corner_uvs(mesh))
                     }
+                    Shape::Curves(curves) if by_material[curves.material as usize].is_some() => {
+                        match curves.kind {
+                            CurveKind::Cylinder => GeometryUv::Tube(
+                                (curves.points.chunks_exact(4))
+                                    .map(|c| [c[0], c[1], c[2], c[3]])
+                                    .collect(),
+                            ),
+                            kind => GeometryUv::Band(kind),
+                        }
+                    }
                     _ => GeometryUv::Untextured,
                 })
                 .collect()
@@ -63,11 +83,36 @@ impl Texturing {
         let prototype_uv = (description.prototypes.iter())
             .map(|p| uvs(&p.shapes))
             .collect();
+        let has_tubes = uv.iter().any(|g| matches!(g, GeometryUv::Tube(_)));
         Self {
             by_material,
             uv,
             prototype_uv,
+            has_tubes,
         }
+    }
+
+    /// pbrt's v on a textured tube, for a hit at `u` along segment `primitive` of `geometry`
+    /// with unit normal `normal` by a ray along `dir` (`None` on anything else). pbrt draws a
+    /// cylinder curve on a band facing the ray, v running from 0 to 1 across it; a ray that
+    /// far across meets the tube where the normal's part across (along tangent × `dir`) is
+    /// 2v − 1.
+    pub(super) fn tube_v(
+        &self,
+        geometry: u32,
+        primitive: u32,
+        u: f32,
+        normal: Vec3,
+        dir: Vec3,
+    ) -> Option<f32> {
+        let Some(GeometryUv::Tube(segments)) = self.uv.get(geometry as usize) else {
+            return None;
+        };
+        let [p0, p1, p2, p3] = segments[primitive as usize];
+        let w = 1.0 - u;
+        let tangent = w * w * (p1 - p0) + 2.0 * w * u * (p2 - p1) + u * u * (p3 - p2);
+        let across = tangent.cross(dir).normalize_or_zero();
+        Some((0.5 + 0.5 * normal.dot(across)).clamp(0.0, 1.0))
     }
 
     /// The textured material of id `material`, if it has textures.
@@ -77,7 +122,8 @@ impl Texturing {
     }
 
     /// The (u, v) at a hit on `geometry`: triangle `primitive` at barycentrics
-    /// `barycentric` (the weights of corners 1 and 2), or the point `position`.
+    /// `barycentric` (the weights of corners 1 and 2), Embree's (u, v) on a curve, or the
+    /// point `position`.
     pub(super) fn uv(
         &self,
         geometry: u32,
@@ -93,7 +139,8 @@ impl Texturing {
         )
     }
 
-    /// [`Self::uv`] on geometry `geometry` of prototype `prototype`, `local` in its space.
+    /// [`Self::uv`] on geometry `geometry` of prototype `prototype`, `local` in its space (a
+    /// tube inside an object keeps Embree's v).
     pub(super) fn prototype_uv(
         &self,
         prototype: u32,
@@ -116,6 +163,15 @@ fn geometry_uv(uv: Option<&GeometryUv>, primitive: u32, barycentric: Vec2, posit
             (1.0 - barycentric.x - barycentric.y) * t0 + barycentric.x * t1 + barycentric.y * t2
         }
         Some(GeometryUv::Sphere { center }) => sphere_uv(position - *center),
+        Some(GeometryUv::Band(kind)) => {
+            let v = match kind {
+                CurveKind::Flat => 0.5 * (barycentric.y + 1.0),
+                _ => barycentric.y,
+            };
+            Vec2::new(barycentric.x, v.clamp(0.0, 1.0))
+        }
+        // `resolve` has put pbrt's v in place of Embree's.
+        Some(GeometryUv::Tube(_)) => barycentric,
         _ => Vec2::ZERO,
     }
 }

@@ -60,6 +60,10 @@ pub fn check_scene(scene: &SceneDescription) {
                 assert!(!mesh.triangles.is_empty());
                 assert!(check_mesh(mesh).is_ok());
             }
+            Shape::Curves(curves) => {
+                assert!((curves.material as usize) < scene.materials.len());
+                assert!(dpm::scene::check_curves(curves).is_ok());
+            }
         }
     }
 }

@@ -3,7 +3,9 @@
 //! or film of another scene is refused. Owns the hash and what the fingerprint covers; knows
 //! nothing of the file formats that use them.
 
-use crate::scene::{Light, Material, SceneDescription, Shape, SpotFalloff, Texture, TriangleMesh};
+use crate::scene::{
+    Curves, Light, Material, SceneDescription, Shape, SpotFalloff, Texture, TriangleMesh,
+};
 use glam::Vec3;
 
 /// FNV-1a, 64 bit: the file checksum and the scene fingerprint.
@@ -53,6 +55,21 @@ impl Fnv64 {
         }
         self.u64(mesh.triangles.len() as u64);
         mesh.triangles.iter().flatten().for_each(|&i| self.u32(i));
+    }
+
+    fn curves(&mut self, curves: &Curves) {
+        self.u32(curves.material);
+        self.u32(curves.kind as u32);
+        self.u64(curves.points.len() as u64);
+        curves.points.iter().for_each(|&p| self.vec3(p));
+        curves.radii.iter().for_each(|&r| self.f32(r));
+        match &curves.normals {
+            Some(normals) => {
+                self.u32(1);
+                normals.iter().for_each(|&n| self.vec3(n));
+            }
+            None => self.u32(0),
+        }
     }
 }
 
@@ -247,6 +264,10 @@ fn shapes(h: &mut Fnv64, shapes: &[Shape]) {
             Shape::Triangles(mesh) => {
                 h.u32(1);
                 h.mesh(mesh);
+            }
+            Shape::Curves(curves) => {
+                h.u32(2);
+                h.curves(curves);
             }
         }
     }

@@ -190,6 +190,12 @@ impl Mapper<'_> {
                     power,
                 }
             }
+            Geometry::Curves(_) => {
+                return Err(shape.item.at.error(
+                    "AreaLightSource",
+                    "an area light on a curve is not supported: dpm's area lights are spheres and triangle meshes",
+                ));
+            }
             Geometry::Triangles(mesh) if mesh.cutout.is_some() => {
                 return Err(shape.item.at.error(
                     "Shape",

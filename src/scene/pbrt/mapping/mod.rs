@@ -1,11 +1,12 @@
 //! What the parsed pbrt directives become in dpm: the film ([`film`]: resolution, crop window
 //! and what pbrt does to the written image), the camera ([`camera`]), the lights (pbrt gives intensity or radiance,
 //! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`], the tessellated ones in
-//! [`tessellated`]).
+//! [`tessellated`], curves in [`curves`]).
 //! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
 //! Owns the mapping; must not parse text.
 
 mod camera;
+mod curves;
 mod environment;
 mod film;
 mod lights;

@@ -3,15 +3,16 @@
 //! geometric normal is pbrt's (the side a glass is entered from, an area light emits to);
 //! full `sphere`s become spheres; the quadrics, partial spheres, `loopsubdiv` and
 //! `heightfield` are tessellated ([`super::tessellated`]) and placed here like a mesh; a
-//! shape's `alpha`/`shadowalpha` becomes its mesh's [`Cutout`] (a cut sphere is tessellated).
-//! Curves and NURBS are refused. Owns placing shapes; must not choose materials.
+//! shape's `alpha`/`shadowalpha` becomes its mesh's [`Cutout`] (a cut sphere is tessellated);
+//! `curve`s become Bézier curves ([`super::curves`]). NURBS are refused. Owns placing
+//! shapes; must not choose materials.
 
 use super::super::parser::{Item, ShapeItem};
 use super::tessellated::SphereCut;
 use super::textures::TextureType;
 use super::{Mapper, param_error, require, value_error};
 use crate::scene::tessellate::quadrics::Quadric;
-use crate::scene::{Cutout, SceneError, Shape, Texture, TriangleMesh, ply, rules};
+use crate::scene::{Curves, Cutout, SceneError, Shape, Texture, TriangleMesh, ply, rules};
 use glam::{Mat3, Vec2, Vec3};
 
 /// A bilinear patch whose fourth corner is further than this (relative to its size) from
@@ -31,6 +32,7 @@ pub(super) struct MeshData {
 pub(in super::super) enum Geometry {
     Sphere { center: Vec3, radius: f32 },
     Triangles(TriangleMesh),
+    Curves(Curves),
 }
 
 impl Mapper<'_> {
@@ -49,6 +51,10 @@ impl Mapper<'_> {
                 mesh.material = material;
                 vec![Shape::Triangles(mesh)]
             }
+            Geometry::Curves(mut curves) => {
+                curves.material = material;
+                vec![Shape::Curves(curves)]
+            }
         })
     }
 
@@ -60,6 +66,12 @@ impl Mapper<'_> {
             (Geometry::Triangles(mut mesh), Some(cutout)) => {
                 mesh.cutout = Some(cutout);
                 Geometry::Triangles(mesh)
+            }
+            (Geometry::Curves(_), Some(_)) => {
+                return Err(item.at.error(
+                    "Shape",
+                    "\"alpha\" on a curve is not supported: dpm cuts out triangle meshes only",
+                ));
             }
             (geometry, _) => geometry,
         })
@@ -182,9 +194,10 @@ impl Mapper<'_> {
             "disk" | "cylinder" | "cone" | "paraboloid" | "hyperboloid" => self.quadric(shape),
             "loopsubdiv" => self.loop_subdivision(shape),
             "heightfield" => self.heightfield(shape),
-            "curve" | "nurbs" => Err(item.at.error(
+            "curve" => self.curve(shape),
+            "nurbs" => Err(item.at.error(
                 "Shape",
-                format!("shape \"{}\" is not supported: dpm renders triangle meshes, spheres and the quadrics (convert it to a trianglemesh or plymesh)", item.kind),
+                "shape \"nurbs\" is not supported: dpm renders triangle meshes, spheres, the quadrics and curves (convert it to a trianglemesh or plymesh)",
             )),
             other => Err(item.at.error("Shape", format!("\"{other}\" is not a pbrt shape"))),
         }
