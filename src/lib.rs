@@ -7,6 +7,7 @@
 //! Each stage is one module; each module's opening paragraph says what it owns and what it
 //! must not touch.
 
+pub mod bsdf;
 pub mod density;
 pub mod embree;
 pub mod estimate;

@@ -214,6 +214,31 @@ pub fn basis(n: Vec3) -> (Vec3, Vec3) {
     )
 }
 
+/// A shading frame: the basis [`basis`] gives around a unit normal, which becomes local z.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+}
+
+impl Frame {
+    pub fn new(n: Vec3) -> Self {
+        let (t, b) = basis(n);
+        Self { t, b, n }
+    }
+
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        v.x * self.t + v.y * self.b + v.z * self.n
+    }
+}
+
 /// `(sin 2πt, cos 2πt)` for `t ≥ 0` (the warps pass `t` in [0, 1)), within 2e-7 of the exact
 /// values: a quarter-turn reduction and two short Taylor polynomials on [−π/4, π/4], without
 /// the library call that cost photon tracing several percent.

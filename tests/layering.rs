@@ -13,6 +13,7 @@ const LAYERS: &[&str] = &[
     "resident_memory",
     "sampling",
     "optics",
+    "bsdf",
     "spectrum",
     "image_io",
     "image_metrics",

@@ -454,20 +454,29 @@ fn materials_map_exactly_or_warn_once_and_strict_refuses_approximations() {
          NamedMaterial \"coat\"\nShape \"sphere\"\nTranslate 3 0 0\nShape \"sphere\"\n\
          Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"\nShape \"sphere\"\n\
          Material \"dielectric\" \"float eta\" 1.33\nShape \"sphere\"\n\
-         Material \"diffuse\" \"rgb reflectance\" [0.1 0.2 0.3]\nShape \"sphere\"\n",
+         Material \"diffuse\" \"rgb reflectance\" [0.1 0.2 0.3]\nShape \"sphere\"\n\
+         Material \"matte\" \"float sigma\" 20\nShape \"sphere\"\n",
     );
     let (scene, report) = loads(&text);
     let m = &scene.materials;
     assert_eq!(
         m.len(),
-        4,
+        5,
         "one scene material per pbrt material used: {m:?}"
     );
+    // pbrt-v3's uber with its defaults: roughness 0.1 remapped, index 1.5, opaque.
+    let alpha = dpm::bsdf::pbrt_v3_roughness_to_alpha(0.1);
     assert_eq!(
         m[0],
-        Material::Diffuse {
-            albedo: Vec3::new(0.2, 0.3, 0.4)
-        }
+        Material::Bsdf(dpm::bsdf::Model::Uber {
+            kd: Vec3::new(0.2, 0.3, 0.4),
+            ks: Vec3::splat(0.5),
+            kr: Vec3::ZERO,
+            kt: Vec3::ZERO,
+            alpha: glam::Vec2::splat(alpha),
+            eta: 1.5,
+            opacity: Vec3::ONE,
+        })
     );
     assert!(matches!(m[1], Material::Mirror { .. }), "{m:?}");
     assert!(
@@ -480,25 +489,20 @@ fn materials_map_exactly_or_warn_once_and_strict_refuses_approximations() {
             albedo: Vec3::new(0.1, 0.2, 0.3)
         }
     );
-    let uber: Vec<_> = report
-        .warnings
-        .iter()
-        .filter(|w| w.contains("uber"))
-        .collect();
-    assert_eq!(
-        uber.len(),
-        2,
-        "one mapping warning and one for Ks: {:?}",
+    assert!(
+        !report.warnings.iter().any(|w| w.contains("uber")),
+        "uber is rendered as pbrt defines it: {:?}",
         report.warnings
     );
-    assert!(
-        uber.iter().all(|w| w.contains("scene.pbrt:6:1")),
-        "{uber:?}"
-    );
+    let sigma: Vec<_> = (report.warnings.iter())
+        .filter(|w| w.contains("sigma"))
+        .collect();
+    assert_eq!(sigma.len(), 1, "{:?}", report.warnings);
+    assert!(sigma[0].contains("scene.pbrt:17:1"), "{sigma:?}");
     let dir = tempfile::tempdir().unwrap();
     let path = write_scene(dir.path(), "scene.pbrt", &text);
     let e = scene::load_with_options(&path, &LoadOptions { strict: true }).unwrap_err();
-    assert_eq!((e.line, e.column), (Some(6), Some(1)), "{e}");
+    assert_eq!((e.line, e.column), (Some(17), Some(1)), "{e}");
     assert!(e.message.contains("--strict"), "{e}");
 }
 

@@ -3,6 +3,7 @@
 //! pilot paths learn about where to send caustic photons in [`guide`]; nothing here calls
 //! Embree except through [`crate::world`].
 
+mod bsdf_scatter;
 pub mod guide;
 pub mod kdtree;
 pub mod map;

@@ -473,13 +473,13 @@ pub fn path_rays(
 /// A path on its way: its next ray and what it carries.
 pub(super) struct LivePath {
     path_in_chunk: u32,
-    rng: Rng,
+    pub(super) rng: Rng,
     origin: Vec3,
     direction: Vec3,
-    flux: Vec3,
+    pub(super) flux: Vec3,
     bounces: u32,
-    specular_seen: bool,
-    diffuse_seen: bool,
+    pub(super) specular_seen: bool,
+    pub(super) diffuse_seen: bool,
 }
 
 impl LivePath {
@@ -551,18 +551,7 @@ fn advance(
     let (ng, ns) = hit.facing(d);
     let next = match material {
         Material::Diffuse { albedo } => {
-            let store = match kind {
-                MapKind::Caustic => path.specular_seen,
-                MapKind::Global { with_direct } => path.diffuse_seen || with_direct,
-            };
-            if store {
-                stored.push(TracedPhoton {
-                    position: hit.position,
-                    flux: path.flux,
-                    directions: EncodedDirections::new(d, ns),
-                    path_in_chunk: path.path_in_chunk,
-                });
-            }
+            store_photon(kind, path, hit.position, d, ns, stored);
             if kind == MapKind::Caustic {
                 return false;
             }
@@ -595,6 +584,12 @@ fn advance(
             path.flux *= branch.pick(*reflect_tint, *transmit_tint);
             next
         }
+        Material::Bsdf(model) => {
+            match super::bsdf_scatter::scatter(kind, path, model, &hit, d, ns, stored) {
+                Some(next) => next,
+                None => return false,
+            }
+        }
     };
     if specular_tinted_out(material, path.flux) {
         // A tint took everything: nothing left to store.
@@ -606,6 +601,32 @@ fn advance(
     path.origin = hit.position + side * eps;
     path.direction = next;
     path.bounces < MAX_BOUNCES
+}
+
+/// Leaves the path's photon at a diffuse landing (`position`, arriving along `d` on the side
+/// of `ns`) when its map keeps such paths: the caustic map those that met a mirror, glass or
+/// glossy lobe first, the global map those past a diffuse bounce (or all, `with_direct`).
+#[inline(always)]
+pub(super) fn store_photon(
+    kind: MapKind,
+    path: &LivePath,
+    position: Vec3,
+    d: Vec3,
+    ns: Vec3,
+    stored: &mut Vec<TracedPhoton>,
+) {
+    let store = match kind {
+        MapKind::Caustic => path.specular_seen,
+        MapKind::Global { with_direct } => path.diffuse_seen || with_direct,
+    };
+    if store {
+        stored.push(TracedPhoton {
+            position,
+            flux: path.flux,
+            directions: EncodedDirections::new(d, ns),
+            path_in_chunk: path.path_in_chunk,
+        });
+    }
 }
 
 /// Whether a mirror's or glass's tint has left a path nothing to carry.

@@ -18,7 +18,6 @@ use super::pass::RenderSettings;
 use crate::photon::Neighbours;
 use crate::photon::guide::{Landing, PilotPhotons};
 use crate::sampling::{Rng, Stream};
-use crate::scene::Material;
 use crate::timing::PhaseTimes;
 use crate::world::{Surface, World};
 use glam::Vec3;
@@ -117,7 +116,7 @@ fn mean_direct_irradiance(world: &World, camera: &RayCamera, seed: u64) -> f32 {
             let Surface::Material(m) = closest.surface else {
                 return 0.0;
             };
-            if !matches!(world.material(m), Material::Diffuse { .. }) {
+            if !world.material(m).is_diffuse_receiver() {
                 return 0.0;
             }
             let hit = world.resolve(closest);

@@ -6,12 +6,13 @@
 //! the film's layers. Knows nothing of passes or pixels: a camera path brings its own
 //! [`PathSampler`]. Owns shading; must not build maps or write images.
 
+use crate::bsdf::{Bsdf, Part};
 use crate::estimate::{PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
-use crate::sampling::{PathSampler, cosine_hemisphere};
+use crate::sampling::{Frame, PathSampler, cosine_hemisphere};
 use crate::scene::Material;
-use crate::world::{Surface, World};
+use crate::world::{Interaction, Surface, World};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -74,7 +75,7 @@ pub struct EstimatedMap<'a> {
 }
 
 impl EstimatedMap<'_> {
-    fn irradiance(&self, query: &Query, scratch: &mut Scratch) -> Vec3 {
+    pub(super) fn irradiance(&self, query: &Query, scratch: &mut Scratch) -> Vec3 {
         self.estimate.irradiance(self.map, query, scratch)
     }
 }
@@ -157,6 +158,27 @@ impl Integrator<'_> {
         let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
             return counted(self.world.background(dir));
         };
+        self.shade(&hit, dir, depth, emission, sampler, scratch)
+    }
+
+    /// Radiance leaving `hit` back along the ray `dir` that found it.
+    pub(super) fn shade(
+        &self,
+        hit: &Interaction,
+        dir: Vec3,
+        depth: u32,
+        emission: Emission,
+        sampler: &mut PathSampler,
+        scratch: &mut Scratch,
+    ) -> Radiance {
+        let counted = |e: Vec3| Radiance {
+            direct: if emission == Emission::Counted {
+                e
+            } else {
+                Vec3::ZERO
+            },
+            ..Radiance::default()
+        };
         let m = match hit.surface {
             Surface::Light(l) => {
                 let light = &self.world.light_sources[l];
@@ -165,7 +187,10 @@ impl Integrator<'_> {
             Surface::Material(m) => m,
         };
         let (ng, ns) = hit.facing(dir);
-        match &self.world.material_at(m, &hit) {
+        match &self.world.material_at(m, hit) {
+            Material::Bsdf(model) => {
+                self.shade_bsdf(hit, model, dir, depth, emission, sampler, scratch)
+            }
             Material::Diffuse { albedo } => {
                 let p = self.offset(hit.position, ng);
                 let query = Query {
@@ -281,12 +306,12 @@ impl Integrator<'_> {
         Vec3::ZERO
     }
 
-    fn offset(&self, p: Vec3, n: Vec3) -> Vec3 {
+    pub(super) fn offset(&self, p: Vec3, n: Vec3) -> Vec3 {
         p + n * self.world.ray_epsilon()
     }
 
     /// Origin for a ray leaving `p` in direction `d`, on the side `d` points to.
-    fn spawn(&self, p: Vec3, ng: Vec3, d: Vec3) -> Vec3 {
+    pub(super) fn spawn(&self, p: Vec3, ng: Vec3, d: Vec3) -> Vec3 {
         self.offset(p, if d.dot(ng) >= 0.0 { ng } else { -ng })
     }
 
@@ -323,7 +348,7 @@ impl Integrator<'_> {
     }
 
     /// Indirect irradiance/π at a diffuse point (to be multiplied by the albedo).
-    fn indirect(
+    pub(super) fn indirect(
         &self,
         p: Vec3,
         n: Vec3,
@@ -367,6 +392,8 @@ impl Integrator<'_> {
     ) -> Vec3 {
         // What the specular bounces so far let through: their tints.
         let mut throughput = Vec3::ONE;
+        // What the BSDF surfaces met on the way gave.
+        let mut gathered = Vec3::ZERO;
         for _ in 0..=GATHER_SPECULAR_DEPTH {
             let Some(hit) = self.world.intersect(o, d, 0.0, f32::INFINITY) else {
                 break;
@@ -377,6 +404,30 @@ impl Integrator<'_> {
             };
             let (ng, ns) = hit.facing(d);
             let material = &self.world.material_at(m, &hit);
+            if let Material::Bsdf(model) = material {
+                // The Lambert lobes read the map; the others are followed, as a mirror is.
+                let bsdf = Bsdf::new(model);
+                let frame = Frame::new(hit.shading_normal);
+                let wo = frame.to_local(-d);
+                if bsdf.has(Part::Lambert) {
+                    let q = Query {
+                        position: hit.position,
+                        normal: ns,
+                    };
+                    let e = precomputed
+                        .and_then(|t| t.lookup(&q, scratch))
+                        .unwrap_or_else(|| map.irradiance(&q, scratch));
+                    gathered += throughput * bsdf.lambert_reflectance(wo) * FRAC_1_PI * e;
+                }
+                let Some(s) = bsdf.sample(wo, rng.next_f32(), rng.next_2d(), Part::Followed) else {
+                    break;
+                };
+                throughput *= s.f * (s.wi.z.abs() / s.pdf);
+                let next = frame.to_world(s.wi);
+                o = self.spawn(hit.position, ng, next);
+                d = next;
+                continue;
+            }
             if let Material::Diffuse { albedo } = material {
                 let q = Query {
                     position: hit.position,
@@ -387,7 +438,7 @@ impl Integrator<'_> {
                 let e = precomputed
                     .and_then(|t| t.lookup(&q, scratch))
                     .unwrap_or_else(|| map.irradiance(&q, scratch));
-                return throughput * *albedo * FRAC_1_PI * e;
+                return gathered + throughput * *albedo * FRAC_1_PI * e;
             }
             let Some((next, tint)) = sampled_specular(material, &hit, d, ns, rng) else {
                 break;
@@ -396,7 +447,7 @@ impl Integrator<'_> {
             o = self.spawn(hit.position, ng, next);
             d = next;
         }
-        Vec3::ZERO
+        gathered
     }
 }
 
@@ -412,6 +463,18 @@ fn sampled_specular(
 ) -> Option<(Vec3, Vec3)> {
     match material {
         Material::Diffuse { .. } => None,
+        // Its delta lobes only: what a non-delta lobe sees is the camera path's own business.
+        Material::Bsdf(model) => {
+            let frame = Frame::new(hit.shading_normal);
+            let s = Bsdf::new(model).sample(
+                frame.to_local(-dir),
+                rng.next_f32(),
+                rng.next_2d(),
+                Part::Followed,
+            )?;
+            s.delta
+                .then(|| (frame.to_world(s.wi), s.f * (s.wi.z.abs() / s.pdf)))
+        }
         Material::Mirror { tint } => Some((reflect(dir, ns), *tint)),
         Material::Glass {
             ior,

@@ -12,6 +12,7 @@
 //! or store photons.
 
 pub mod args;
+mod bsdf_shading;
 pub mod camera;
 pub mod caustic_guide;
 pub mod emission;

@@ -34,7 +34,6 @@ use crate::estimate::{
 use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, TraceCounts, trace_map};
 use crate::sampling::PathSampler;
-use crate::scene::Material;
 use crate::timing::{PhaseTimes, progress};
 use crate::world::{Surface, World};
 use glam::Vec3;
@@ -401,7 +400,7 @@ impl KernelProbe<'_> {
         let Surface::Material(m) = hit.surface else {
             return ROUND;
         };
-        if !matches!(self.world.material(m), Material::Diffuse { .. }) {
+        if !self.world.material(m).is_diffuse_receiver() {
             return ROUND;
         }
         let (_, n) = hit.facing(dir);

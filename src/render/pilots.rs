@@ -217,7 +217,9 @@ impl<'w> Survey<'w> {
                 hit.position + side * world.ray_epsilon()
             };
             match world.material(m) {
-                Material::Diffuse { .. } => {
+                // A camera path reads the photon maps at a BSDF's Lambert lobes and follows
+                // its other lobes stochastically: the pilot stops there as at a diffuse one.
+                Material::Diffuse { .. } | Material::Bsdf(_) => {
                     last_rays.push((o, d, code));
                     if pilot.normal.is_none() {
                         pilot.normal = Some(ns);

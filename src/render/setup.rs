@@ -18,7 +18,7 @@ use crate::estimate::settings::EstimatorKind;
 use crate::image_io::ImageFormat;
 use crate::photon::store::{self, MapInfo};
 use crate::photon::tracer::MapKind;
-use crate::scene::{self, Material};
+use crate::scene;
 use crate::timing::PhaseTimes;
 use crate::world::World;
 use std::path::Path;
@@ -188,7 +188,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let description = &world.description;
     let diffuse = |shapes: &[scene::Shape]| {
         (shapes.iter())
-            .filter(|s| matches!(world.material(s.material()), Material::Diffuse { .. }))
+            .filter(|s| world.material(s.material()).is_diffuse_receiver())
             .count()
     };
     // Every placement of a prototype is an object of its own.

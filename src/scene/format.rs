@@ -20,7 +20,21 @@ const LIGHT_TYPES: [&str; 7] = [
     "environment",
     "mesh",
 ];
-const MATERIAL_TYPES: [&str; 3] = ["diffuse", "mirror", "glass"];
+const MATERIAL_TYPES: [&str; 13] = [
+    "diffuse",
+    "mirror",
+    "glass",
+    "plastic",
+    "uber",
+    "substrate",
+    "translucent",
+    "conductor",
+    "rough_glass",
+    "thin_glass",
+    "coated_diffuse",
+    "coated_conductor",
+    "diffuse_transmission",
+];
 const OBJECT_TYPES: [&str; 3] = ["sphere", "quad", "mesh"];
 
 /// The whole file, typed but not yet checked.
@@ -179,6 +193,8 @@ pub(crate) enum MaterialSpec {
     Diffuse(DiffuseSpec),
     Mirror(MirrorSpec),
     Glass(GlassSpec),
+    /// Any type past `glass` in `MATERIAL_TYPES`, read by [`super::toml_bsdf`].
+    Bsdf(&'static str, Box<super::toml_bsdf::BsdfSpec>),
 }
 
 #[derive(Deserialize)]
@@ -435,7 +451,14 @@ fn read_material(doc: &Document, path: &str, value: &Value) -> Result<MaterialSp
     Ok(match kind {
         "diffuse" => MaterialSpec::Diffuse(doc.deserialize(&fields)?),
         "mirror" => MaterialSpec::Mirror(doc.deserialize(&fields)?),
-        _ => MaterialSpec::Glass(doc.deserialize(&fields)?),
+        "glass" => MaterialSpec::Glass(doc.deserialize(&fields)?),
+        bsdf => {
+            if let DeValue::Table(table) = fields.get_ref() {
+                let names = table.iter().map(|(k, _)| k.get_ref().to_string());
+                super::toml_bsdf::check_fields(doc, path, bsdf, names)?;
+            }
+            MaterialSpec::Bsdf(bsdf, doc.deserialize(&fields)?)
+        }
     })
 }
 

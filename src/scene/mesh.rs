@@ -374,9 +374,51 @@ fn map_mtl(m: &tobj::Material) -> Result<Material, (&'static str, String)> {
     if let Some(bad) = kd.iter().find(|&&x| !is_unit_channel(x)) {
         return Err(("Kd", format!("Kd channel {bad} is not in [0, 1]")));
     }
-    Ok(Material::Diffuse {
-        albedo: Vec3::from_array(kd),
-    })
+    let kd = Vec3::from_array(kd);
+    let number = |key: &'static str| -> Result<Option<f32>, (&'static str, String)> {
+        match m.unknown_param.get(key) {
+            None => Ok(None),
+            Some(text) => match text.trim().parse::<f32>() {
+                Ok(x) if (0.0..=1.0).contains(&x) => Ok(Some(x)),
+                _ => Err((key, format!("{key} `{text}` is not a number in [0, 1]"))),
+            },
+        }
+    };
+    // The PBR extension: metallic `Pm` (a metal at 0.5 and above, of colour Kd), roughness
+    // `Pr` (α = Pr², the usual convention).
+    if let (Some(metallic), roughness) = (number("Pm")?, number("Pr")?) {
+        let alpha = glam::Vec2::splat(roughness.unwrap_or(0.5).powi(2).max(1e-3));
+        return Ok(Material::Bsdf(if metallic >= 0.5 {
+            let r = kd.clamp(Vec3::ZERO, Vec3::splat(0.9999));
+            crate::bsdf::Model::Conductor {
+                eta: Vec3::ONE,
+                k: 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5),
+                alpha,
+            }
+        } else {
+            // A dielectric base: 4% at normal incidence, pbrt-v3 plastic's Fresnel.
+            crate::bsdf::Model::Plastic {
+                kd,
+                ks: Vec3::ONE,
+                alpha,
+            }
+        }));
+    }
+    // Phong's highlight (illum 2, Ks, exponent Ns) as plastic: α = √(2 / (Ns + 2)), the
+    // microfacet lobe of the same width.
+    let ks = Vec3::from_array(m.specular.unwrap_or([0.0; 3]));
+    if m.illumination_model == Some(2) && ks.max_element() > 0.0 {
+        if let Some(bad) = ks.to_array().iter().find(|&&x| !is_unit_channel(x)) {
+            return Err(("Ks", format!("Ks channel {bad} is not in [0, 1]")));
+        }
+        let ns = m.shininess.unwrap_or(10.0).max(0.0);
+        return Ok(Material::Bsdf(crate::bsdf::Model::Plastic {
+            kd,
+            ks,
+            alpha: glam::Vec2::splat((2.0 / (ns + 2.0)).sqrt()),
+        }));
+    }
+    Ok(Material::Diffuse { albedo: kd })
 }
 
 /// The library holding tobj material `id`, and the material's name.

@@ -19,11 +19,13 @@ pub mod environment;
 pub mod files;
 mod format;
 mod mesh;
+pub mod metals;
 mod pbrt;
 pub mod ply;
 mod rules;
 pub(crate) mod tessellate;
 pub mod texture;
+mod toml_bsdf;
 mod toml_texture;
 pub(crate) mod transform;
 mod validate;
@@ -325,9 +327,34 @@ pub enum Material {
         reflect_tint: Vec3,
         transmit_tint: Vec3,
     },
+    /// A material modelled by its BSDF (pbrt's plastic, uber, rough metals and glass, ...):
+    /// its Lambert lobes read the photon maps as a diffuse surface does, its other lobes are
+    /// sampled and followed. Diffuse, mirror and smooth glass keep their own variants, so a
+    /// scene of those alone renders as it always has.
+    Bsdf(crate::bsdf::Model),
 }
 
 impl Material {
+    /// Whether photons stay on it (it has a Lambert lobe) and a camera path reads the photon
+    /// maps there.
+    pub fn is_diffuse_receiver(&self) -> bool {
+        match self {
+            Material::Diffuse { .. } => true,
+            Material::Mirror { .. } | Material::Glass { .. } => false,
+            Material::Bsdf(model) => crate::bsdf::Bsdf::new(model).has(crate::bsdf::Part::Lambert),
+        }
+    }
+
+    /// Whether light leaving it can focus into a caustic: it has a lobe that is followed
+    /// rather than estimated from photons (a mirror, glass, a glossy coat).
+    pub fn makes_caustics(&self) -> bool {
+        match self {
+            Material::Diffuse { .. } => false,
+            Material::Mirror { .. } | Material::Glass { .. } => true,
+            Material::Bsdf(model) => crate::bsdf::Bsdf::new(model).has(crate::bsdf::Part::Followed),
+        }
+    }
+
     /// A mirror that reflects everything.
     pub const MIRROR: Material = Material::Mirror { tint: Vec3::ONE };
 

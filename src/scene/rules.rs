@@ -126,7 +126,146 @@ pub fn check_material(material: &Material) -> Result<(), InvalidField> {
             unit_rgb("reflect_tint", *reflect_tint)?;
             unit_rgb("transmit_tint", *transmit_tint).map(drop)
         }
+        Material::Bsdf(model) => check_model(model),
     }
+}
+
+/// A BSDF model's colours in [0, 1] (pbrt's uber and plastic may sum above 1, as in pbrt),
+/// its indices and roughnesses finite and in range.
+fn check_model(model: &crate::bsdf::Model) -> Result<(), InvalidField> {
+    use crate::bsdf::Model;
+    let alpha = |name: &str, a: glam::Vec2| {
+        if a.is_finite() && a.min_element() >= 0.0 && a.max_element() <= 10.0 {
+            Ok(())
+        } else {
+            Err(InvalidField::new(
+                name,
+                format!("roughness α {a} is not in [0, 10]"),
+            ))
+        }
+    };
+    let conductor = |eta: Vec3, k: Vec3| {
+        if eta.is_finite() && k.is_finite() && eta.min_element() > 0.0 && k.min_element() >= 0.0 {
+            Ok(())
+        } else {
+            Err(InvalidField::new(
+                "eta",
+                format!("conductor η {eta}, k {k}: η must be positive, k at least 0"),
+            ))
+        }
+    };
+    match *model {
+        Model::Plastic { kd, ks, alpha: a } | Model::Substrate { kd, ks, alpha: a } => {
+            unit_rgb("kd", kd)?;
+            unit_rgb("ks", ks)?;
+            alpha("roughness", a)
+        }
+        Model::Uber {
+            kd,
+            ks,
+            kr,
+            kt,
+            alpha: a,
+            eta,
+            opacity,
+        } => {
+            for (name, c) in [
+                ("kd", kd),
+                ("ks", ks),
+                ("kr", kr),
+                ("kt", kt),
+                ("opacity", opacity),
+            ] {
+                unit_rgb(name, c)?;
+            }
+            ior("ior", eta)?;
+            alpha("roughness", a)
+        }
+        Model::Translucent {
+            kd,
+            ks,
+            reflect,
+            transmit,
+            alpha: a,
+        } => {
+            for (name, c) in [
+                ("kd", kd),
+                ("ks", ks),
+                ("reflect", reflect),
+                ("transmit", transmit),
+            ] {
+                unit_rgb(name, c)?;
+            }
+            alpha("roughness", a)
+        }
+        Model::Conductor { eta, k, alpha: a } => {
+            conductor(eta, k)?;
+            alpha("roughness", a)
+        }
+        Model::Dielectric {
+            eta,
+            alpha: a,
+            reflect_tint,
+            transmit_tint,
+        } => {
+            ior("ior", eta)?;
+            unit_rgb("reflect_tint", reflect_tint)?;
+            unit_rgb("transmit_tint", transmit_tint)?;
+            alpha("roughness", a)
+        }
+        Model::ThinDielectric { eta } => ior("eta", eta).map(drop),
+        Model::CoatedDiffuse {
+            reflectance,
+            alpha: a,
+            eta,
+            thickness,
+            albedo,
+            g,
+        } => {
+            unit_rgb("reflectance", reflectance)?;
+            unit_rgb("albedo", albedo)?;
+            ior("eta", eta)?;
+            layer(thickness, g)?;
+            alpha("roughness", a)
+        }
+        Model::CoatedConductor {
+            interface_alpha,
+            interface_eta,
+            thickness,
+            albedo,
+            g,
+            conductor_eta,
+            conductor_k,
+            conductor_alpha,
+        } => {
+            ior("interface.eta", interface_eta)?;
+            unit_rgb("albedo", albedo)?;
+            layer(thickness, g)?;
+            conductor(conductor_eta, conductor_k)?;
+            alpha("interface.roughness", interface_alpha)?;
+            alpha("conductor.roughness", conductor_alpha)
+        }
+        Model::DiffuseTransmission {
+            reflectance,
+            transmittance,
+        } => {
+            unit_rgb("reflectance", reflectance)?;
+            unit_rgb("transmittance", transmittance).map(drop)
+        }
+    }
+}
+
+fn layer(thickness: f32, g: f32) -> Result<(), InvalidField> {
+    if !(thickness.is_finite() && thickness > 0.0) {
+        return Err(InvalidField::new(
+            "thickness",
+            format!("{thickness} is not a positive length"),
+        ));
+    }
+    if !(g.is_finite() && g.abs() < 1.0) {
+        return Err(InvalidField::new("g", format!("{g} is not in (−1, 1)")));
+    }
+    Ok(())
 }
 
 /// Checks a triangle mesh: at least one triangle, finite positions, indices in range, no

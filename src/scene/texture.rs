@@ -308,6 +308,11 @@ impl TexturedMaterial {
                     *transmit_tint = colour
                 }
                 (Material::Glass { ior, .. }, TexturedParameter::Ior) => *ior = v.x.max(1.0),
+                (Material::Bsdf(model), TexturedParameter::Albedo) => {
+                    if let Some(kd) = model.diffuse_mut() {
+                        *kd = colour;
+                    }
+                }
                 // A parameter the material does not have: the readers never pair them.
                 _ => {}
             }

@@ -345,6 +345,15 @@ pub(crate) fn material(
                 TexturedParameter::TransmitTint,
             )?,
         },
+        MaterialSpec::Bsdf(kind, spec) => {
+            let mut diffuse = |field: &str, given: Option<&ColourSpec>, default: f32| match given {
+                None => Ok(Vec3::splat(default)),
+                Some(_) => colour(field, given, TexturedParameter::Albedo),
+            };
+            let refuse =
+                |field: &str, message: String| doc.error(&child_path(path, field), message);
+            Material::Bsdf(super::toml_bsdf::model(kind, spec, &mut diffuse, &refuse)?)
+        }
     };
     check_material(&material).map_err(at(doc, path))?;
     Ok((material, textures))

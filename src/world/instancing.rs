@@ -11,7 +11,7 @@
 use super::hit_normals::{HitNormals, normals_at};
 use super::{BoundingSphere, Surface, add_shape, aim};
 use crate::embree::{self, EmbreeError, SceneBuilder};
-use crate::scene::{Material, SceneDescription};
+use crate::scene::SceneDescription;
 use glam::{Mat3, Mat4, Vec3};
 use std::sync::Arc;
 
@@ -78,10 +78,7 @@ impl Instancing {
                 parts.surfaces.push(Surface::Material(material));
                 parts.normals.push(normals);
                 (lo, hi) = (lo.min(a), hi.max(b));
-                if !matches!(
-                    description.materials[material as usize],
-                    Material::Diffuse { .. }
-                ) {
+                if description.materials[material as usize].makes_caustics() {
                     (spec_lo, spec_hi) = (spec_lo.min(a), spec_hi.max(b));
                     specular.push(shape);
                 }

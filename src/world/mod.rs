@@ -205,10 +205,7 @@ impl World {
             normals.push(hit_normals);
             lo = lo.min(a);
             hi = hi.max(b);
-            if !matches!(
-                description.materials[material as usize],
-                Material::Diffuse { .. }
-            ) {
+            if description.materials[material as usize].makes_caustics() {
                 spec_lo = spec_lo.min(a);
                 spec_hi = spec_hi.max(b);
                 specular_shapes.push(shape);
@@ -408,9 +405,7 @@ impl World {
     pub fn has_diffuse(&self) -> bool {
         (self.surfaces.iter().copied())
             .chain(self.instancing.placed_surfaces())
-            .any(|s| {
-                matches!(s, Surface::Material(m) if matches!(self.material(m), Material::Diffuse { .. }))
-            })
+            .any(|s| matches!(s, Surface::Material(m) if self.material(m).is_diffuse_receiver()))
     }
 
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {

@@ -184,6 +184,13 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
                 h.vec3(*reflect_tint);
                 h.vec3(*transmit_tint);
             }
+            Material::Bsdf(model) => {
+                h.u32(3);
+                // Every parameter, exactly: `Debug` prints each f32 so that it reads back.
+                format!("{model:?}")
+                    .bytes()
+                    .for_each(|b| h.u32(u32::from(b)));
+            }
         }
     }
     shapes(&mut h, &scene.shapes);

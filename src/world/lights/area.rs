@@ -59,6 +59,7 @@ pub(super) fn sphere_incident(
         direction,
         distance,
         irradiance: sphere_radiance(radius, power) * cone_solid_angle(cos_max),
+        pdf: 1.0 / cone_solid_angle(cos_max),
     })
 }
 
@@ -87,6 +88,7 @@ fn flat_incident(
         direction,
         distance,
         irradiance: radiance * (cos_light * area / d2),
+        pdf: d2 / (cos_light * area),
     })
 }
 
@@ -358,6 +360,14 @@ pub(super) struct MeshLight {
 }
 
 impl MeshLight {
+    pub(super) fn area(&self) -> f32 {
+        self.area
+    }
+
+    pub(super) fn two_sided(&self) -> bool {
+        self.two_sided
+    }
+
     pub(super) fn new(mesh: &TriangleMesh, power: Vec3, two_sided: bool) -> Self {
         let triangles: Vec<Triangle> = (mesh.triangles.iter())
             .map(|t| {

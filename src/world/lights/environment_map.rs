@@ -113,6 +113,7 @@ impl EnvironmentMapLight {
             direction: towards,
             distance: f32::INFINITY,
             irradiance: radiance / pdf,
+            pdf,
         })
     }
 }

@@ -128,6 +128,7 @@ impl Distant {
             direction: -self.direction,
             distance: f32::INFINITY,
             irradiance: self.irradiance,
+            pdf: f32::INFINITY,
         }
     }
 }
@@ -191,6 +192,7 @@ impl Environment {
             direction,
             distance: f32::INFINITY,
             irradiance: self.radiance * (PI / cos),
+            pdf: cos / PI,
         })
     }
 }

@@ -43,6 +43,9 @@ pub struct IncidentSample {
     /// Irradiance contribution on a surface facing `direction` (already divided by the pdf),
     /// before the receiver's cosine: multiply by `max(0, n·direction)`.
     pub irradiance: Vec3,
+    /// The solid-angle density the direction was drawn with; infinite for a point, spot or
+    /// distant light (for weighting it against a BSDF's samples).
+    pub pdf: f32,
 }
 
 /// Luminance-like weight used to split photons among lights.
@@ -288,6 +291,60 @@ impl LightSource {
             Kind::Distant(distant) => Some(distant.incident()),
             Kind::Environment(environment) => environment.incident(n, u),
             Kind::EnvironmentMap(map) => map.incident(n, u),
+        }
+    }
+}
+
+impl LightSource {
+    /// The solid-angle density with which [`LightSource::sample_incident`] at `x` (normal `n`)
+    /// draws the unit direction `dir`, given that a ray along it meets this light at distance
+    /// `distance` where its surface's normal is `light_normal` (anything for the lights at
+    /// infinity): what a BSDF sample that found the light weighs itself against. Zero for a
+    /// point, spot or distant light, which no such ray can find.
+    pub fn incident_pdf(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        dir: Vec3,
+        distance: f32,
+        light_normal: Vec3,
+    ) -> f32 {
+        let flat = |area: f32, two_sided: bool| {
+            let cos = -dir.dot(light_normal);
+            let cos = if two_sided { cos.abs() } else { cos };
+            if cos > 0.0 && area > 0.0 {
+                distance * distance / (cos * area)
+            } else {
+                0.0
+            }
+        };
+        match &self.0 {
+            Kind::Point { .. } | Kind::Spot(_) | Kind::Distant(_) => 0.0,
+            Kind::Sphere { center, radius, .. } => {
+                let to = *center - x;
+                let d2 = to.length_squared();
+                if d2 <= radius * radius {
+                    return 0.0;
+                }
+                let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
+                if dir.dot(to) < cos_max * d2.sqrt() {
+                    return 0.0;
+                }
+                1.0 / crate::sampling::cone_solid_angle(cos_max)
+            }
+            Kind::Quad { edge_u, edge_v, .. } => {
+                flat(area::quad_area_normal(*edge_u, *edge_v).0, false)
+            }
+            Kind::Mesh(mesh) => flat(mesh.area(), mesh.two_sided()),
+            Kind::Environment(_) => dir.dot(n).max(0.0) / std::f32::consts::PI,
+            Kind::EnvironmentMap(map) => {
+                let cos = dir.dot(n);
+                if cos <= 0.0 {
+                    0.0
+                } else {
+                    0.5 * cos / std::f32::consts::PI + 0.5 * map.pdf(dir)
+                }
+            }
         }
     }
 }

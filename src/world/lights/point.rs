@@ -28,6 +28,7 @@ pub(super) fn point_incident(position: Vec3, power: Vec3, x: Vec3) -> Option<Inc
             direction: to / distance,
             distance,
             irradiance: power / (4.0 * PI * d2),
+            pdf: f32::INFINITY,
         }
     })
 }
@@ -177,6 +178,7 @@ impl Spot {
             direction,
             distance,
             irradiance: intensity / d2,
+            pdf: f32::INFINITY,
         })
     }
 }

@@ -6,9 +6,11 @@
 //! Owns the mapping; must not parse text.
 
 mod camera;
+mod conductors;
 mod curves;
 mod environment;
 mod film;
+mod glossy;
 mod lights;
 mod materials;
 mod shapes;

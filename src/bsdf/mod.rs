@@ -1,0 +1,354 @@
+//! Surface scattering: the BSDFs of pbrt's materials behind one interface (evaluate, sample,
+//! pdf, albedo) over lobes kept side by side ([`lobes`]), in the local shading frame: z is the
+//! shading normal as the surface gives it (not turned to the ray), `wo` and `wi` unit and
+//! pointing away from the surface, on either side (`wo.z` < 0: the ray came from below, or
+//! from inside a dielectric). Owns the lobes' arithmetic (Lambert, Trowbridge–Reitz microfacets
+//! with visible-normal sampling, Fresnel of conductors and dielectrics, Ashikhmin–Shirley, a
+//! coated base) and which lobes each of pbrt's materials has; must not trace rays, read scenes
+//! or know of photons.
+//!
+//! Which lobes a renderer estimates from photons and which it samples and follows is its
+//! choice: a [`Part`] splits a BSDF into its Lambert reflection lobes and the rest.
+//!
+//! Convention: no transmission lobe scales radiance by 1/η² (nor does dpm's smooth glass): on
+//! a closed object the factor on the way in cancels the one on the way out.
+
+pub mod fresnel;
+mod lobes;
+pub mod microfacet;
+mod model;
+
+pub use microfacet::{pbrt_v3_roughness_to_alpha, pbrt_v4_roughness_to_alpha};
+pub use model::Model;
+
+use glam::{Vec2, Vec3};
+use lobes::{Fresnel, Lobe};
+use microfacet::TrowbridgeReitz;
+
+/// Which lobes a call concerns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// Every lobe.
+    All,
+    /// The Lambert reflection lobes alone (f = [`Bsdf::lambert_reflectance`]/π on `wo`'s
+    /// side): what a renderer estimates from photon irradiance.
+    Lambert,
+    /// Every other lobe: microfacet and specular, Lambert transmission, the Fresnel blend and
+    /// coated bases, which a renderer samples and follows.
+    Followed,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    pub wi: Vec3,
+    /// The value for `wi`; for a delta lobe, the value that makes f·|cos θi|/pdf the sample's
+    /// weight.
+    pub f: Vec3,
+    /// Solid-angle density (the lobes of the part mixed); for a delta lobe, the probability
+    /// with which it was chosen.
+    pub pdf: f32,
+    pub delta: bool,
+    pub transmission: bool,
+}
+
+const MAX_LOBES: usize = 5;
+
+/// A material's lobes at a hit: no heap, cheap to build per hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf {
+    lobes: [Lobe; MAX_LOBES],
+    count: usize,
+}
+
+/// Index 1.5, pbrt-v3's plastic and translucent coats.
+const COAT_ETA: f32 = 1.5;
+
+impl Bsdf {
+    pub fn new(model: &Model) -> Bsdf {
+        let mut b = Bsdf {
+            lobes: [Lobe::Lambert(Vec3::ZERO); MAX_LOBES],
+            count: 0,
+        };
+        let tr = TrowbridgeReitz::new;
+        match *model {
+            Model::Plastic { kd, ks, alpha } => {
+                b.push(Lobe::Lambert(kd));
+                b.push(Lobe::Reflection {
+                    scale: ks,
+                    fresnel: Fresnel::Dielectric(COAT_ETA),
+                    distribution: tr(alpha),
+                    coat: 0.0,
+                });
+            }
+            Model::Uber {
+                kd,
+                ks,
+                kr,
+                kt,
+                alpha,
+                eta,
+                opacity,
+            } => {
+                b.push(Lobe::SpecularTransmission {
+                    scale: Vec3::ONE - opacity,
+                    eta: 1.0,
+                });
+                b.push(Lobe::Lambert(opacity * kd));
+                b.push(Lobe::Reflection {
+                    scale: opacity * ks,
+                    fresnel: Fresnel::Dielectric(eta),
+                    distribution: tr(alpha),
+                    coat: 0.0,
+                });
+                b.push(Lobe::Reflection {
+                    scale: opacity * kr,
+                    fresnel: Fresnel::Dielectric(eta),
+                    distribution: tr(Vec2::ZERO),
+                    coat: 0.0,
+                });
+                b.push(Lobe::SpecularTransmission {
+                    scale: opacity * kt,
+                    eta,
+                });
+            }
+            Model::Substrate { kd, ks, alpha } => b.push(Lobe::FresnelBlend {
+                rd: kd,
+                rs: ks,
+                distribution: tr(alpha),
+            }),
+            Model::Translucent {
+                kd,
+                ks,
+                reflect,
+                transmit,
+                alpha,
+            } => {
+                b.push(Lobe::Lambert(kd * reflect));
+                b.push(Lobe::LambertTransmission(kd * transmit));
+                b.push(Lobe::Dielectric {
+                    eta: COAT_ETA,
+                    reflect: ks * reflect,
+                    transmit: ks * transmit,
+                    distribution: tr(alpha),
+                });
+            }
+            Model::Conductor { eta, k, alpha } => b.push(Lobe::Reflection {
+                scale: Vec3::ONE,
+                fresnel: Fresnel::Conductor { eta, k },
+                distribution: tr(alpha),
+                coat: 0.0,
+            }),
+            Model::Dielectric {
+                eta,
+                alpha,
+                reflect_tint,
+                transmit_tint,
+            } => b.push(Lobe::Dielectric {
+                eta,
+                reflect: reflect_tint,
+                transmit: transmit_tint,
+                distribution: tr(alpha),
+            }),
+            Model::ThinDielectric { eta } => b.push(Lobe::ThinDielectric { eta }),
+            Model::CoatedDiffuse {
+                reflectance,
+                alpha,
+                eta,
+                thickness,
+                ..
+            } => {
+                b.push(Lobe::Reflection {
+                    scale: Vec3::ONE,
+                    fresnel: Fresnel::Dielectric(eta),
+                    distribution: tr(alpha),
+                    coat: 0.0,
+                });
+                b.push(Lobe::CoatedBase {
+                    rho: reflectance,
+                    eta,
+                    thickness,
+                    inner: fresnel::coat_round_trip(eta, thickness),
+                });
+            }
+            Model::CoatedConductor {
+                interface_alpha,
+                interface_eta,
+                thickness,
+                conductor_eta,
+                conductor_k,
+                conductor_alpha,
+                ..
+            } => {
+                b.push(Lobe::Reflection {
+                    scale: Vec3::ONE,
+                    fresnel: Fresnel::Dielectric(interface_eta),
+                    distribution: tr(interface_alpha),
+                    coat: 0.0,
+                });
+                // The conductor seen through the coat: its index relative to the coat's, the
+                // light the coat lets in and out, attenuated by the layer there and back.
+                b.push(Lobe::Reflection {
+                    scale: Vec3::splat((-2.0 * thickness).exp()),
+                    fresnel: Fresnel::Conductor {
+                        eta: conductor_eta / interface_eta,
+                        k: conductor_k / interface_eta,
+                    },
+                    distribution: tr(conductor_alpha.max(interface_alpha)),
+                    coat: interface_eta,
+                });
+            }
+            Model::DiffuseTransmission {
+                reflectance,
+                transmittance,
+            } => {
+                b.push(Lobe::Lambert(reflectance));
+                b.push(Lobe::LambertTransmission(transmittance));
+            }
+        }
+        b
+    }
+
+    fn push(&mut self, lobe: Lobe) {
+        let zero = match lobe {
+            Lobe::Lambert(c) | Lobe::LambertTransmission(c) => c.max_element() <= 0.0,
+            Lobe::Reflection { scale, .. } | Lobe::SpecularTransmission { scale, .. } => {
+                scale.max_element() <= 0.0
+            }
+            Lobe::Dielectric {
+                reflect, transmit, ..
+            } => reflect.max_element() <= 0.0 && transmit.max_element() <= 0.0,
+            Lobe::FresnelBlend { rd, rs, .. } => rd.max_element() <= 0.0 && rs.max_element() <= 0.0,
+            Lobe::CoatedBase { rho, .. } => rho.max_element() <= 0.0,
+            Lobe::ThinDielectric { .. } => false,
+        };
+        if !zero && self.count < MAX_LOBES {
+            self.lobes[self.count] = lobe;
+            self.count += 1;
+        }
+    }
+
+    fn lobes(&self, part: Part) -> impl Iterator<Item = &Lobe> {
+        self.lobes[..self.count].iter().filter(move |l| match part {
+            Part::All => true,
+            Part::Lambert => matches!(l, Lobe::Lambert(_)),
+            Part::Followed => !matches!(l, Lobe::Lambert(_)),
+        })
+    }
+
+    /// f(wo, wi) of the non-delta lobes in `part` (not times the cosine).
+    pub fn f(&self, wo: Vec3, wi: Vec3, part: Part) -> Vec3 {
+        self.lobes(part).map(|l| l.f(wo, wi)).sum()
+    }
+
+    /// A cheap weight of the lobes in `part` at `wo` (about their albedo), for choosing
+    /// between parts.
+    pub fn weight(&self, wo: Vec3, part: Part) -> f32 {
+        self.lobes(part).map(|l| l.weight(wo)).sum()
+    }
+
+    /// The density with which [`Bsdf::sample`] draws the non-delta `wi`.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, part: Part) -> f32 {
+        let total = self.weight(wo, part);
+        if total <= 0.0 {
+            return 0.0;
+        }
+        self.lobes(part)
+            .filter(|l| !l.is_delta())
+            .map(|l| l.weight(wo) * l.pdf(wo, wi))
+            .sum::<f32>()
+            / total
+    }
+
+    /// Draws `wi` from the lobes in `part`: one lobe chosen with `u_lobe` by its weight, the
+    /// direction from `u`. `None` when nothing is scattered that way.
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: (f32, f32), part: Part) -> Option<BsdfSample> {
+        let total = self.weight(wo, part);
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let mut pick = u_lobe * total;
+        let mut chosen = None;
+        for lobe in self.lobes(part) {
+            let w = lobe.weight(wo);
+            if w <= 0.0 {
+                continue;
+            }
+            chosen = Some((lobe, w));
+            if pick < w {
+                break;
+            }
+            pick -= w;
+        }
+        // Rounding can leave `pick` past the last lobe: that lobe it is.
+        let (lobe, w) = chosen?;
+        // The lobe's own choices (reflect or transmit) use what is left of u_lobe.
+        let uc = (pick / w).clamp(0.0, 0.999_999);
+        let s = lobe.sample(wo, uc, u)?;
+        let transmission = s.wi.z * wo.z < 0.0;
+        if s.delta {
+            return Some(BsdfSample {
+                wi: s.wi,
+                f: s.f,
+                pdf: s.pdf * w / total,
+                delta: true,
+                transmission,
+            });
+        }
+        let pdf = self.pdf(wo, s.wi, part);
+        (pdf > 0.0).then(|| BsdfSample {
+            wi: s.wi,
+            f: self.f(wo, s.wi, part),
+            pdf,
+            delta: false,
+            transmission,
+        })
+    }
+
+    /// Directional albedo ∫ f |cos θi| dωi of the lobes in `part`, delta lobes included:
+    /// deterministic (a fixed stratified set of 16 × 16 samples of each lobe).
+    pub fn albedo(&self, wo: Vec3, part: Part) -> Vec3 {
+        let n = 16;
+        let mut sum = Vec3::ZERO;
+        for lobe in self.lobes(part) {
+            let mut lobe_sum = Vec3::ZERO;
+            for i in 0..n {
+                for j in 0..n {
+                    let u = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                    // The golden-ratio sequence: spread, and apart from the grid's (u, v).
+                    let uc = (0.5 + (i * n + j) as f32 * 0.618_034).fract();
+                    if let Some(s) = lobe.sample(wo, uc, u) {
+                        let weight = s.f * s.wi.z.abs() / s.pdf;
+                        if weight.is_finite() {
+                            lobe_sum += weight;
+                        }
+                    }
+                }
+            }
+            sum += lobe_sum / (n * n) as f32;
+        }
+        sum
+    }
+
+    /// Whether any lobe is in `part`.
+    pub fn has(&self, part: Part) -> bool {
+        self.lobes(part).next().is_some()
+    }
+
+    /// Whether every lobe is a delta lobe.
+    pub fn is_delta(&self) -> bool {
+        self.lobes(Part::All).all(Lobe::is_delta)
+    }
+
+    /// The Lambert reflection coefficient of the [`Part::Lambert`] lobes.
+    pub fn lambert_reflectance(&self, _wo: Vec3) -> Vec3 {
+        self.lobes(Part::Lambert)
+            .map(|l| match l {
+                Lobe::Lambert(r) => *r,
+                _ => Vec3::ZERO,
+            })
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,209 @@
+//! pbrt's materials beyond diffuse, mirror and smooth glass, rendered: a convex object under a
+//! constant environment reflects it by its directional albedo (nothing else reaches it), which
+//! checks the eye pass's glossy path, its multiple importance sampling and its Lambert lobes'
+//! photon estimates against the BSDF's own closed form; and the TOML format reads every model.
+
+mod support;
+
+use dpm::bsdf::{Bsdf, Part};
+use dpm::image_metrics::channel_mean;
+use dpm::scene::{self, Material};
+use glam::Vec3;
+use support::pbrt::render;
+
+const SIZE: u32 = 48;
+const RADIUS: f32 = 0.8;
+
+/// A sphere of `material` under a white environment, seen by an orthographic camera whose
+/// screen window is ±1: every camera ray runs along −z.
+fn sphere_under_sky(material: &str) -> String {
+    format!(
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\"\n\
+         Film \"image\" \"integer xresolution\" {SIZE} \"integer yresolution\" {SIZE}\nWorldBegin\n\
+         LightSource \"infinite\" \"rgb L\" [1 1 1]\n{material}\nShape \"sphere\" \"float radius\" {RADIUS}\n"
+    )
+}
+
+/// The image's mean under a unit environment: each pixel's 8 × 8 sub-samples see the
+/// sphere's albedo at their angle of view, or the sky.
+fn expected_mean(bsdf: &Bsdf) -> f64 {
+    let (mut sum, n) = (0.0, 8);
+    for j in 0..SIZE * n {
+        for i in 0..SIZE * n {
+            let x = -1.0 + (i as f32 + 0.5) * 2.0 / (SIZE * n) as f32;
+            let y = -1.0 + (j as f32 + 0.5) * 2.0 / (SIZE * n) as f32;
+            let r2 = (x * x + y * y) / (RADIUS * RADIUS);
+            sum += if r2 < 1.0 {
+                let cos = (1.0 - r2).sqrt();
+                let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+                channel_mean(bsdf.albedo(wo, Part::All)) as f64
+            } else {
+                1.0
+            };
+        }
+    }
+    sum / f64::from(SIZE * SIZE * n * n)
+}
+
+fn image_mean(image: &dpm::image_io::Image) -> f64 {
+    image.pixels.iter().map(|p| channel_mean(*p)).sum::<f64>() / image.pixels.len() as f64
+}
+
+#[test]
+fn convex_objects_under_a_constant_sky_reflect_it_by_their_directional_albedo() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        "Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\" \
+         \"float roughness\" 0.3 \"bool remaproughness\" \"false\"",
+        "Material \"conductor\" \"rgb eta\" [0.2 0.9 1.1] \"rgb k\" [3.9 2.4 2.1] \
+         \"float uroughness\" 0.05 \"float vroughness\" 0.4 \"bool remaproughness\" \"false\"",
+        "Material \"plastic\" \"rgb Kd\" [0.5 0.3 0.2] \"rgb Ks\" [0.4 0.4 0.4] \"float roughness\" 0.2 \
+         \"bool remaproughness\" \"false\"",
+        "Material \"uber\" \"rgb Kd\" [0.2 0.05 0.6] \"float roughness\" 0.01",
+        "Material \"substrate\" \"rgb Kd\" [0.6 0.5 0.4] \"rgb Ks\" [0.05 0.05 0.05] \"float uroughness\" 0.1 \
+         \"float vroughness\" 0.1",
+        "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.2 0.2] \"float roughness\" 0.1",
+    ];
+    for material in cases {
+        let text = sphere_under_sky(material);
+        let (desc, _) = support::pbrt::loads(&text);
+        let Material::Bsdf(model) = desc.materials[0] else {
+            panic!("{material}: {:?}", desc.materials[0]);
+        };
+        let expected = expected_mean(&Bsdf::new(&model));
+        let image = render(dir.path(), "sky.pbrt", &text, "3", &[]);
+        let got = image_mean(&image);
+        eprintln!("{material}\n  image mean {got:.5}, albedo's {expected:.5}");
+        assert!(
+            (got / expected - 1.0).abs() < 0.015,
+            "{material}: image mean {got:.5}, albedo's {expected:.5}"
+        );
+    }
+}
+
+#[test]
+fn the_toml_format_reads_every_bsdf_material_and_refuses_fields_it_does_not_take() {
+    let scene = |material: &str| {
+        format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov_y = 40\nresolution = [8, 8]\n\
+             [[lights]]\ntype = \"point\"\nposition = [0, 3, 3]\npower = [10, 10, 10]\n\
+             [materials.m]\n{material}\n\
+             [[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n"
+        )
+    };
+    let kinds = [
+        (
+            "plastic",
+            "kd = [0.5, 0.2, 0.1]\nks = [0.3, 0.3, 0.3]\nroughness = 0.2",
+        ),
+        (
+            "uber",
+            "kd = [0.5, 0.2, 0.1]\nkr = [0.1, 0.1, 0.1]\nroughness = [0.1, 0.3]",
+        ),
+        ("substrate", "kd = [0.5, 0.2, 0.1]"),
+        ("translucent", "transmit = [0.3, 0.3, 0.3]"),
+        ("conductor", "metal = \"Au\"\nroughness = 0.2"),
+        ("rough_glass", "ior = 1.33\nroughness = 0.1"),
+        ("thin_glass", "ior = 1.5"),
+        (
+            "coated_diffuse",
+            "reflectance = [0.6, 0.6, 0.6]\nthickness = 0.02",
+        ),
+        (
+            "coated_conductor",
+            "metal = \"Cu\"\nconductor_roughness = 0.2",
+        ),
+        ("diffuse_transmission", "transmittance = [0.4, 0.4, 0.4]"),
+    ];
+    for (kind, fields) in kinds {
+        let text = scene(&format!("type = \"{kind}\"\n{fields}"));
+        let desc = support::description(&text);
+        assert!(
+            matches!(desc.materials[0], Material::Bsdf(_)),
+            "{kind}: {:?}",
+            desc.materials[0]
+        );
+    }
+    let bad = [
+        ("type = \"plastic\"\nior = 1.5", "materials.m.ior"),
+        ("type = \"conductor\"\nmetal = \"Zn\"", "materials.m.metal"),
+        ("type = \"plastic\"\nkd = [2, 0, 0]", "materials.m.kd"),
+    ];
+    for (material, names) in bad {
+        let e = scene::parse(&scene(material), std::path::Path::new("m.toml")).unwrap_err();
+        assert!(
+            e.to_string().contains(names) && e.line.is_some(),
+            "{material}: {e}"
+        );
+    }
+}
+
+#[test]
+fn mtl_highlights_and_the_pbr_extension_become_bsdf_models() {
+    use dpm::bsdf::Model;
+    let dir = tempfile::tempdir().unwrap();
+    support::write_scene(
+        dir.path(),
+        "m.mtl",
+        "newmtl shiny\nKd 0.5 0.1 0.1\nKs 0.3 0.3 0.3\nNs 98\nillum 2\n\
+         newmtl gold\nKd 0.9 0.7 0.3\nPm 1\nPr 0.4\n\
+         newmtl paint\nKd 0.2 0.4 0.6\nPm 0\nPr 0.2\n",
+    );
+    support::write_scene(
+        dir.path(),
+        "mesh.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n\
+         usemtl shiny\nf 1 2 3\nusemtl gold\nf 2 4 3\nusemtl paint\nf 2 5 4\n",
+    );
+    let toml = include_str!("fixtures/one-mesh.toml");
+    let (desc, _) =
+        scene::load_with_report(&support::write_scene(dir.path(), "s.toml", toml)).unwrap();
+    let models: Vec<Model> = (desc.materials.iter())
+        .filter_map(|m| match m {
+            Material::Bsdf(model) => Some(*model),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(models.len(), 3, "{:?}", desc.materials);
+    assert!(
+        models
+            .iter()
+            .any(|m| matches!(m, Model::Plastic { ks, alpha, .. }
+        if *ks == Vec3::splat(0.3) && (alpha.x - 0.1414).abs() < 1e-3)),
+        "{models:?}"
+    );
+    assert!(
+        models
+            .iter()
+            .any(|m| matches!(m, Model::Conductor { alpha, .. }
+        if (alpha.x - 0.16).abs() < 1e-5)),
+        "{models:?}"
+    );
+    assert!(
+        models
+            .iter()
+            .any(|m| matches!(m, Model::Plastic { kd, alpha, .. }
+        if *kd == Vec3::new(0.2, 0.4, 0.6) && (alpha.x - 0.04).abs() < 1e-5)),
+        "{models:?}"
+    );
+    // A conductor made from Kd reflects Kd at normal incidence.
+    let gold = models
+        .iter()
+        .find(|m| matches!(m, Model::Conductor { .. }))
+        .unwrap();
+    let Model::Conductor { eta, k, .. } = gold else {
+        unreachable!()
+    };
+    let f0 = ((*eta - 1.0) * (*eta - 1.0) + *k * *k) / ((*eta + 1.0) * (*eta + 1.0) + *k * *k);
+    assert!(
+        (f0 - Vec3::new(0.9, 0.7, 0.3)).abs().max_element() < 1e-4,
+        "{f0}"
+    );
+    support::write_scene(
+        dir.path(),
+        "m.mtl",
+        "newmtl shiny\nKd 0.5 0.1 0.1\nPm metal\n",
+    );
+    let e = scene::load(&support::write_scene(dir.path(), "s.toml", toml)).unwrap_err();
+    assert!(e.to_string().contains("Pm"), "{e}");
+}
