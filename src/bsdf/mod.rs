@@ -211,6 +211,11 @@ impl Bsdf {
     fn push(&mut self, lobe: Lobe) {
         let zero = match lobe {
             Lobe::Lambert(c) | Lobe::LambertTransmission(c) => c.max_element() <= 0.0,
+            // Index 1 reflects nothing (pbrt's uber with `index` 1).
+            Lobe::Reflection {
+                fresnel: Fresnel::Dielectric(1.0),
+                ..
+            } => true,
             Lobe::Reflection { scale, .. } | Lobe::SpecularTransmission { scale, .. } => {
                 scale.max_element() <= 0.0
             }
@@ -332,6 +337,15 @@ impl Bsdf {
     /// Whether any lobe is in `part`.
     pub fn has(&self, part: Part) -> bool {
         self.lobes(part).next().is_some()
+    }
+
+    /// The reflectance of a BSDF that is one Lambert lobe and nothing else (pbrt's uber of
+    /// index 1, a plastic without `Ks`): a diffuse surface, and should be rendered as one.
+    pub fn lambert_only(&self) -> Option<Vec3> {
+        match self.lobes[..self.count] {
+            [Lobe::Lambert(r)] => Some(r),
+            _ => None,
+        }
     }
 
     /// Whether every lobe is a delta lobe.

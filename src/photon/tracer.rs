@@ -314,6 +314,11 @@ fn chunk_len(batch: u64) -> u64 {
 /// Paths a wanted photon past which a map is left short.
 pub const MAX_PATHS_PER_PHOTON: u64 = 64;
 
+/// Paths past which a map that has kept no photon at all is left empty: its paths never land
+/// (a glossy sphere alone, whose reflections leave the scene), and the rest of the path
+/// limit would find as few.
+pub const EMPTY_AFTER_PATHS: u64 = 1 << 20;
+
 /// The tracing half of [`trace_map`], kept apart so that it can be timed on its own.
 ///
 /// Paths run in batches sized to finish the pass; a batch is split into chunks of consecutive
@@ -340,7 +345,11 @@ pub fn trace_photons(
     let mut emitted: u64 = 0;
     let mut rays = 0u64;
     let mut batch = 16_384u64;
-    while stored < target && emitted < max_paths && !crate::interrupt::requested() {
+    while stored < target
+        && emitted < max_paths
+        && !(stored == 0 && emitted >= EMPTY_AFTER_PATHS)
+        && !crate::interrupt::requested()
+    {
         let start = emitted;
         let end = (start + batch).min(max_paths);
         let step = chunk_len(end - start);
@@ -385,7 +394,12 @@ pub fn trace_photons(
         // to spare: the paths of a batch past the target are traced for nothing.
         let rate = stored.max(1) as f64 / emitted.max(1) as f64;
         let remaining = (target - stored.min(target)) as f64 / rate;
-        batch = (remaining * 1.02).clamp(16_384.0, 4_000_000.0) as u64;
+        batch = if stored == 0 {
+            // Nothing has landed yet: grow by steps, to find out soon if nothing ever will.
+            (batch * 4).min(EMPTY_AFTER_PATHS)
+        } else {
+            (remaining * 1.02).clamp(16_384.0, 4_000_000.0) as u64
+        };
     }
     if crate::interrupt::requested() {
         let mut traced = TracedPhotons::new(Vec::new(), TraceCounts { emitted, stored: 0 }, rays);

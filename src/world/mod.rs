@@ -396,9 +396,18 @@ impl World {
         self.background != Vec3::ZERO || !self.sky_maps.is_empty()
     }
 
-    /// Whether any object is a mirror or glass (so caustic photons exist).
+    /// Whether any object is a mirror, glass or glossy (so caustic photons exist) and some
+    /// diffuse surface could receive what it focuses: not a convex sphere alone, whose own
+    /// glossy reflections leave it.
     pub fn has_specular(&self) -> bool {
-        !self.caustic_targets.is_empty()
+        if self.caustic_targets.is_empty() {
+            return false;
+        }
+        let d = &self.description;
+        if !d.instances.is_empty() || d.shapes.len() != 1 {
+            return true;
+        }
+        !matches!(d.shapes[0], Shape::Sphere { .. })
     }
 
     /// Whether any object is diffuse (so photons have somewhere to be stored).

@@ -114,7 +114,7 @@ impl Mapper<'_> {
                     None => index("eta")?.unwrap_or(1.5),
                 };
                 if roughness(&["roughness", "uroughness", "vroughness"])? > 0.0 {
-                    exact(Material::Bsdf(
+                    exact(as_material(
                         self.glossy_model(kind, params, at, &read, ior)?,
                     ))
                 } else {
@@ -147,7 +147,7 @@ impl Mapper<'_> {
                     };
                 let rough = roughness(&["roughness", "uroughness", "vroughness"])?;
                 if kind == "thindielectric" || rough > 0.0 {
-                    exact(Material::Bsdf(
+                    exact(as_material(
                         self.glossy_model(kind, params, at, &read, ior)?,
                     ))
                 } else {
@@ -175,14 +175,14 @@ impl Mapper<'_> {
                     };
                     exact(Material::Mirror { tint: reflectance })
                 } else {
-                    exact(Material::Bsdf(
+                    exact(as_material(
                         self.glossy_model(kind, params, at, &read, 1.0)?,
                     ))
                 }
             }
             kind if super::glossy::is_glossy_kind(kind) => {
                 let eta = (float("eta")?).unwrap_or(1.5);
-                exact(Material::Bsdf(
+                exact(as_material(
                     self.glossy_model(kind, params, at, &read, eta)?,
                 ))
             }
@@ -233,6 +233,15 @@ impl Mapper<'_> {
             }
         }
         Ok(mapped)
+    }
+}
+
+/// A model that is one Lambert lobe and nothing else is a diffuse material (the same image,
+/// by the quicker path).
+fn as_material(model: crate::bsdf::Model) -> Material {
+    match crate::bsdf::Bsdf::new(&model).lambert_only() {
+        Some(albedo) => Material::Diffuse { albedo },
+        None => Material::Bsdf(model),
     }
 }
 
