@@ -123,6 +123,21 @@ pub enum Emission {
     Elsewhere,
 }
 
+impl Emission {
+    /// Emitted radiance `e` that a camera path sees, as this mode counts it.
+    #[inline]
+    fn counted(self, e: Vec3) -> Radiance {
+        Radiance {
+            direct: if self == Emission::Counted {
+                e
+            } else {
+                Vec3::ZERO
+            },
+            ..Radiance::default()
+        }
+    }
+}
+
 impl Integrator<'_> {
     /// Radiance arriving at `origin` from direction `-dir` (unit `dir`).
     pub fn radiance(
@@ -147,14 +162,7 @@ impl Integrator<'_> {
         sampler: &mut PathSampler,
         scratch: &mut Scratch,
     ) -> Radiance {
-        let counted = |e: Vec3| Radiance {
-            direct: if emission == Emission::Counted {
-                e
-            } else {
-                Vec3::ZERO
-            },
-            ..Radiance::default()
-        };
+        let counted = |e: Vec3| emission.counted(e);
         let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
             return counted(self.world.background(dir));
         };
@@ -171,14 +179,7 @@ impl Integrator<'_> {
         sampler: &mut PathSampler,
         scratch: &mut Scratch,
     ) -> Radiance {
-        let counted = |e: Vec3| Radiance {
-            direct: if emission == Emission::Counted {
-                e
-            } else {
-                Vec3::ZERO
-            },
-            ..Radiance::default()
-        };
+        let counted = |e: Vec3| emission.counted(e);
         let m = match hit.surface {
             Surface::Light(l) => {
                 let light = &self.world.light_sources[l];
