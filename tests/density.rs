@@ -7,7 +7,7 @@ use dpm::density::csv::{CsvError, parse_photons};
 use dpm::density::grid::{self, Extent, Grid};
 use dpm::density::rng::SplitMix64;
 use dpm::density::{DensityArgs, DensityError, Distribution, DistributionName, load_photons, run};
-use dpm::estimate::{Query, RadianceEstimate, Scratch};
+use dpm::estimate::{Query, RadianceEstimate, Receiver, Scratch};
 use dpm::image_io::read_pfm;
 use dpm::photon::{Photon, PhotonMap};
 use glam::{DVec2, Vec3};
@@ -40,6 +40,21 @@ impl RadianceEstimate for DiscCount {
         map.tree()
             .for_each_within(query.position, self.radius * self.radius, |slot, _| {
                 sum += map.photon(slot).power();
+            });
+        sum / (std::f32::consts::PI * self.radius * self.radius)
+    }
+    fn reflected(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        receiver: &dyn Receiver,
+        _scratch: &mut Scratch,
+    ) -> Vec3 {
+        let mut sum = Vec3::ZERO;
+        map.tree()
+            .for_each_within(query.position, self.radius * self.radius, |slot, _| {
+                let photon = map.photon(slot);
+                sum += photon.power() * receiver.bsdf(photon.direction());
             });
         sum / (std::f32::consts::PI * self.radius * self.radius)
     }

@@ -207,3 +207,80 @@ fn mtl_highlights_and_the_pbr_extension_become_bsdf_models() {
     let e = scene::load(&support::write_scene(dir.path(), "s.toml", toml)).unwrap_err();
     assert!(e.to_string().contains("Pm"), "{e}");
 }
+
+/// A rough conductor floor under a point light and, above the light, a mirror: the mirror's
+/// image of the light lights the floor through the caustic map alone (no ray followed from
+/// the floor can find a point light), and the floor reflects it by its BSDF for the image's
+/// direction. Seen straight down by an orthographic camera, the caustic layer is
+/// f(up, towards the image)·I·cos θ/d² at each pixel, and the direct layer the same for the
+/// light itself: both against dpm's own BSDF, pixel by pixel over the central disc.
+#[test]
+fn a_rough_floor_reflects_a_mirrored_point_light_through_its_caustic_photons() {
+    let dir = tempfile::tempdir().unwrap();
+    let (light_y, mirror_y, size) = (1.0f32, 2.0f32, 32u32);
+    let text = format!(
+        "LookAt 0 1.5 0  0 0 0  0 0 1\nCamera \"orthographic\" \"float screenwindow\" [-0.5 0.5 -0.5 0.5]\n\
+         Film \"image\" \"integer xresolution\" {size} \"integer yresolution\" {size}\nWorldBegin\n\
+         LightSource \"point\" \"point from\" [0 {light_y} 0] \"rgb I\" [5 5 5]\n\
+         AttributeBegin\nMaterial \"conductor\" \"rgb eta\" [0.2 0.9 1.1] \"rgb k\" [3.9 2.4 2.1] \
+         \"float roughness\" 0.3 \"bool remaproughness\" \"false\"\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+         \"point P\" [-4 0 -4  4 0 -4  4 0 4  -4 0 4]\nAttributeEnd\n\
+         AttributeBegin\nMaterial \"mirror\" \"rgb Kr\" [1 1 1]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+         \"point P\" [-1.5 {mirror_y} -1.5  1.5 {mirror_y} -1.5  1.5 {mirror_y} 1.5  -1.5 {mirror_y} 1.5]\nAttributeEnd\n"
+    );
+    let (desc, _) = support::pbrt::loads(&text);
+    let Material::Bsdf(model) = desc.materials[0] else {
+        panic!("{:?}", desc.materials[0]);
+    };
+    let bsdf = Bsdf::new(&model);
+    assert!(bsdf.has(Part::Estimated) && !bsdf.has(Part::Followed));
+    let path = dir.path().join("floor.pbrt");
+    std::fs::write(&path, &text).unwrap();
+    let out = dir.path().join("floor.exr");
+    let args = [
+        support::path_str(&path),
+        "-o",
+        support::path_str(&out),
+        "--threads",
+        "2",
+        "--passes",
+        "4",
+        "--caustic-photons",
+        "200000",
+        "--global-photons",
+        "0",
+    ];
+    let outcome = dpm::render::pipeline::run(&support::render_args(&args)).unwrap();
+    // Radiance from a point source of intensity 5 at `source` towards the camera (up).
+    let seen_from = |source: Vec3, x: Vec3| {
+        let to = source - x;
+        let wi = to.normalize();
+        let f = bsdf.f(Vec3::Z, Vec3::new(wi.x, wi.z, wi.y), Part::All);
+        channel_mean(f) as f64 * 5.0 * wi.y as f64 / to.length_squared() as f64
+    };
+    let image = Vec3::new(0.0, 2.0 * mirror_y - light_y, 0.0);
+    let light = Vec3::new(0.0, light_y, 0.0);
+    for (layer, source) in [("caustic", image), ("direct", light)] {
+        let got = outcome.film.layer(layer).unwrap();
+        let (mut sum_got, mut sum_want) = (0.0, 0.0);
+        for y in 0..size {
+            for x in 0..size {
+                let u = (x as f32 + 0.5) / size as f32 - 0.5;
+                let v = (y as f32 + 0.5) / size as f32 - 0.5;
+                if u * u + v * v > 0.16 {
+                    continue;
+                }
+                // Symmetric about the vertical axis: the pixel's orientation does not matter.
+                sum_want += seen_from(source, Vec3::new(u, 0.0, v));
+                sum_got += channel_mean(got.pixels[(y * size + x) as usize]) as f64;
+            }
+        }
+        eprintln!("{layer}: {sum_got:.4} against {sum_want:.4}");
+        assert!(
+            (sum_got / sum_want - 1.0).abs() < 0.03,
+            "{layer}: {sum_got:.4} against {sum_want:.4}"
+        );
+    }
+}

@@ -126,6 +126,19 @@ fn reflect(wo: Vec3, m: Vec3) -> Vec3 {
 }
 
 impl Lobe {
+    /// Whether the lobe is in [`super::Part::Estimated`] when microfacet reflection at least
+    /// `min_alpha` rough is. The Fresnel blend is, however smooth: its diffuse term dominates
+    /// what photons bring it.
+    pub fn is_estimated(&self, min_alpha: f32) -> bool {
+        match self {
+            Lobe::Lambert(_) | Lobe::CoatedBase { .. } | Lobe::FresnelBlend { .. } => true,
+            Lobe::Reflection { distribution, .. } => {
+                !distribution.is_smooth() && distribution.alpha.min_element() >= min_alpha
+            }
+            _ => false,
+        }
+    }
+
     pub fn is_delta(&self) -> bool {
         match self {
             Lobe::Reflection { distribution, .. } | Lobe::Dielectric { distribution, .. } => {

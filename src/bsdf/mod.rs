@@ -7,8 +7,9 @@
 //! coated base) and which lobes each of pbrt's materials has; must not trace rays, read scenes
 //! or know of photons.
 //!
-//! Which lobes a renderer estimates from photons and which it samples and follows is its
-//! choice: a [`Part`] splits a BSDF into its Lambert reflection lobes and the rest.
+//! Which lobes a renderer estimates from photons and which it samples and follows: a [`Part`]
+//! splits a BSDF into its broad reflection lobes (Lambert, a coated Lambert base, the Fresnel
+//! blend, microfacet reflection at least [`ESTIMATED_MIN_ALPHA`] rough) and the rest.
 //!
 //! Convention: no transmission lobe scales radiance by 1/η² (nor does dpm's smooth glass): on
 //! a closed object the factor on the way in cancels the one on the way out.
@@ -19,7 +20,15 @@ pub mod microfacet;
 mod model;
 
 pub use microfacet::{pbrt_v3_roughness_to_alpha, pbrt_v4_roughness_to_alpha};
-pub use model::Model;
+pub use model::{Axes, Model, ModelParameter, Remap};
+
+/// The Trowbridge–Reitz α below which a reflection lobe is sampled and followed rather than
+/// read from photons, by default: photons evaluated against a lobe narrower than this are too
+/// few per estimate (its variance grows as 1/α² at equal photons), while a followed lobe loses
+/// what only photons find (a caustic lit by a point light) and a gather ray from a broad lobe
+/// shows the global map's blotches. Chosen by measurement (docs/materials.md,
+/// "The glossy threshold").
+pub const ESTIMATED_MIN_ALPHA: f32 = 0.1;
 
 use glam::{Vec2, Vec3};
 use lobes::{Fresnel, Lobe};
@@ -30,11 +39,12 @@ use microfacet::TrowbridgeReitz;
 pub enum Part {
     /// Every lobe.
     All,
-    /// The Lambert reflection lobes alone (f = [`Bsdf::lambert_reflectance`]/π on `wo`'s
-    /// side): what a renderer estimates from photon irradiance.
-    Lambert,
-    /// Every other lobe: microfacet and specular, Lambert transmission, the Fresnel blend and
-    /// coated bases, which a renderer samples and follows.
+    /// The broad reflection lobes: Lambert, the coated Lambert base, the Fresnel blend and
+    /// microfacet reflection at least [`ESTIMATED_MIN_ALPHA`] rough; what a renderer reads
+    /// from photons, each weighed by f for its direction.
+    Estimated,
+    /// Every other lobe: specular, narrow microfacet, transmission, which a renderer samples
+    /// and follows.
     Followed,
 }
 
@@ -58,16 +68,26 @@ const MAX_LOBES: usize = 5;
 pub struct Bsdf {
     lobes: [Lobe; MAX_LOBES],
     count: usize,
+    /// Microfacet reflection at least this rough is in [`Part::Estimated`].
+    estimated_min_alpha: f32,
 }
 
 /// Index 1.5, pbrt-v3's plastic and translucent coats.
 const COAT_ETA: f32 = 1.5;
 
 impl Bsdf {
+    /// The lobes of `model`, split at [`ESTIMATED_MIN_ALPHA`].
     pub fn new(model: &Model) -> Bsdf {
+        Bsdf::split_at(model, ESTIMATED_MIN_ALPHA)
+    }
+
+    /// The lobes of `model`, microfacet reflection at least `estimated_min_alpha` rough in
+    /// [`Part::Estimated`] (infinity: none).
+    pub fn split_at(model: &Model, estimated_min_alpha: f32) -> Bsdf {
         let mut b = Bsdf {
             lobes: [Lobe::Lambert(Vec3::ZERO); MAX_LOBES],
             count: 0,
+            estimated_min_alpha,
         };
         let tr = TrowbridgeReitz::new;
         match *model {
@@ -233,10 +253,11 @@ impl Bsdf {
     }
 
     fn lobes(&self, part: Part) -> impl Iterator<Item = &Lobe> {
+        let min_alpha = self.estimated_min_alpha;
         self.lobes[..self.count].iter().filter(move |l| match part {
             Part::All => true,
-            Part::Lambert => matches!(l, Lobe::Lambert(_)),
-            Part::Followed => !matches!(l, Lobe::Lambert(_)),
+            Part::Estimated => l.is_estimated(min_alpha),
+            Part::Followed => !l.is_estimated(min_alpha),
         })
     }
 
@@ -353,14 +374,18 @@ impl Bsdf {
         self.lobes(Part::All).all(Lobe::is_delta)
     }
 
-    /// The Lambert reflection coefficient of the [`Part::Lambert`] lobes.
-    pub fn lambert_reflectance(&self, _wo: Vec3) -> Vec3 {
-        self.lobes(Part::Lambert)
-            .map(|l| match l {
-                Lobe::Lambert(r) => *r,
-                _ => Vec3::ZERO,
-            })
-            .sum()
+    /// The summed reflectance of the [`Part::Estimated`] lobes when every one of them is a
+    /// Lambert lobe (their f is that over π whatever the directions): the receiver then needs
+    /// irradiance only, not each photon's direction.
+    pub fn estimated_lambert(&self) -> Option<Vec3> {
+        let mut sum = Vec3::ZERO;
+        for lobe in self.lobes(Part::Estimated) {
+            match lobe {
+                Lobe::Lambert(r) => sum += *r,
+                _ => return None,
+            }
+        }
+        Some(sum)
     }
 }
 

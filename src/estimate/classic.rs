@@ -40,7 +40,10 @@
 //! same whatever the thread count and the order pixels are visited in.
 
 use super::kernel::{PreparedKernel, RadialKernel};
-use super::{NORMAL_AGREEMENT_MIN_COS, Query, RadianceEstimate, Scratch, to_irradiance};
+use super::{
+    NORMAL_AGREEMENT_MIN_COS, Query, RadianceEstimate, Receiver, Scratch, to_irradiance,
+    weighed_power,
+};
 use crate::photon::{Neighbours, PhotonAttributes, PhotonMap};
 use glam::{DVec3, Vec3};
 use std::cell::RefCell;
@@ -133,6 +136,29 @@ impl RadianceEstimate for KnnEstimate {
     }
 
     fn irradiance(&self, map: &PhotonMap, query: &Query, scratch: &mut Scratch) -> Vec3 {
+        self.kernel_sum(map, query, scratch, power_of)
+    }
+
+    fn reflected(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        receiver: &dyn Receiver,
+        scratch: &mut Scratch,
+    ) -> Vec3 {
+        self.kernel_sum(map, query, scratch, |p| weighed_power(p, receiver))
+    }
+}
+
+impl KnnEstimate {
+    /// The kernel-weighted sum of `weigh` over the k nearest agreeing photons, per unit area.
+    fn kernel_sum(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        scratch: &mut Scratch,
+        weigh: impl Fn(&PhotonAttributes) -> DVec3,
+    ) -> Vec3 {
         let Some(radius2) = self.kth_radius2(map, query.position, scratch) else {
             return Vec3::ZERO;
         };
@@ -155,7 +181,7 @@ impl RadianceEstimate for KnnEstimate {
             }
             let photon = map.attributes(n.slot);
             if reader.agrees(photon) {
-                sum += kernel.weight(d2) * power_of(photon);
+                sum += kernel.weight(d2) * weigh(photon);
             }
         }
         to_irradiance(sum / radius2)
@@ -343,6 +369,29 @@ impl RadianceEstimate for FixedRadiusEstimate {
     }
 
     fn irradiance(&self, map: &PhotonMap, query: &Query, _scratch: &mut Scratch) -> Vec3 {
+        self.kernel_sum(map, query, power_of)
+    }
+
+    fn reflected(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        receiver: &dyn Receiver,
+        _scratch: &mut Scratch,
+    ) -> Vec3 {
+        self.kernel_sum(map, query, |p| weighed_power(p, receiver))
+    }
+}
+
+impl FixedRadiusEstimate {
+    /// The kernel-weighted sum of `weigh` over the agreeing photons within the radius, per
+    /// unit area.
+    fn kernel_sum(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        weigh: impl Fn(&PhotonAttributes) -> DVec3,
+    ) -> Vec3 {
         let radius2 = self.radius as f64 * self.radius as f64;
         let mut reader = PhotonReader::new(query.normal);
         let kernel = self.prepared.for_radius2(radius2);
@@ -351,7 +400,7 @@ impl RadianceEstimate for FixedRadiusEstimate {
             .for_each_within(query.position, radius2 as f32, |slot, dist2| {
                 let photon = map.attributes(slot);
                 if reader.agrees(photon) {
-                    sum += kernel.weight(dist2 as f64) * power_of(photon);
+                    sum += kernel.weight(dist2 as f64) * weigh(photon);
                 }
             });
         to_irradiance(sum / radius2)

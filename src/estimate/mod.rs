@@ -1,7 +1,9 @@
 //! Radiance estimates: one interface ([`RadianceEstimate`]), its implementations side by side.
 //! An estimate turns the photons near a surface point into photon power per unit area
-//! (irradiance, W/m² per channel); the caller applies the BRDF. Owns kernels and their
-//! normalisation; must not trace rays or know about Embree, cameras or images.
+//! (irradiance, W/m² per channel), which a Lambert receiver scales by its albedo/π, or into
+//! reflected radiance at a receiver that weighs each photon by its BSDF for the photon's
+//! direction ([`Receiver`]: a glossy surface). Owns kernels and their normalisation; must not
+//! trace rays or know about Embree, cameras, BSDF lobes or images.
 //!
 //! - [`kernel`]: the radial kernels, each normalised over the unit disc.
 //! - [`classic`]: k-nearest-neighbour estimates (simple, cone, Gaussian) and the fixed-radius
@@ -35,7 +37,7 @@ pub use kernel::RadialKernel;
 pub use precomputed::PrecomputedIrradiance;
 pub use settings::{EstimateError, EstimatorKind, EstimatorSettings, ResolvedEstimator};
 
-use crate::photon::{Neighbours, Photon, PhotonMap};
+use crate::photon::{Neighbours, Photon, PhotonAttributes, PhotonMap};
 use glam::Vec3;
 
 /// Where an estimate is asked for: a surface point and its unit normal (on the side light
@@ -54,7 +56,7 @@ pub struct Scratch {
     /// The diffusion estimate's kernel inputs: offset from the query and power of each
     /// agreeing photon within the radius, gathered once by its analysis and summed by its
     /// kernel without reading the map again.
-    pub kernel_inputs: Vec<(Vec3, glam::DVec3)>,
+    pub kernel_inputs: Vec<(Vec3, glam::DVec3, u32)>,
     /// The diffusion estimate's leaf runs of slots whose photons all lie on the query's
     /// surface: its kernel streams them again instead of copying each photon out.
     pub kernel_runs: Vec<diffusion::LeafRun>,
@@ -71,6 +73,30 @@ pub trait RadianceEstimate: Send + Sync {
 
     /// Photon power per unit area arriving at `query`.
     fn irradiance(&self, map: &PhotonMap, query: &Query, scratch: &mut Scratch) -> Vec3;
+
+    /// Radiance reflected at `query` towards the receiver's viewer: the same kernel as
+    /// [`RadianceEstimate::irradiance`] over the same photons, each photon's power times the
+    /// receiver's BSDF for the direction it arrived from. For a receiver whose BSDF is the
+    /// constant ρ/π this is ρ/π times the irradiance.
+    fn reflected(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        receiver: &dyn Receiver,
+        scratch: &mut Scratch,
+    ) -> Vec3;
+}
+
+/// A surface that weighs each photon it receives: a glossy BSDF seen from one direction.
+pub trait Receiver: Sync {
+    /// f(ωo, ωi) per channel for a photon that travelled along `travel` (unit; ωi = −travel).
+    fn bsdf(&self, travel: Vec3) -> Vec3;
+}
+
+/// A photon's power weighed by `receiver`, as f64.
+#[inline]
+pub(crate) fn weighed_power(photon: &PhotonAttributes, receiver: &dyn Receiver) -> glam::DVec3 {
+    (photon.power() * receiver.bsdf(photon.direction())).as_dvec3()
 }
 
 /// Smallest cosine between a photon's stored normal and the query normal for the photon to

@@ -1,10 +1,11 @@
-//! A photon meeting a surface with a BSDF model: left in the map where the model has a
-//! Lambert lobe, then scattered by the Lambert lobes (a diffuse bounce) or by the followed ones
-//! (glossy or specular, as a mirror scatters it), chosen by their weights, with Russian
+//! A photon meeting a surface with a BSDF model: left in the map where the model has a lobe
+//! read from photons ([`Part::Estimated`]: Lambert, rough reflection), then scattered by those
+//! lobes (a diffuse bounce: the path is no longer a caustic one) or by the followed ones
+//! (specular or nearly so, as a mirror scatters it), chosen by their weights, with Russian
 //! roulette by the sample's weight. Part of the tracer ([`super::tracer`]); must not trace.
 
 use super::tracer::{LivePath, MapKind, TracedPhoton, store_photon};
-use crate::bsdf::{Bsdf, Model, Part};
+use crate::bsdf::{Bsdf, Part};
 use crate::sampling::Frame;
 use crate::world::Interaction;
 use glam::Vec3;
@@ -13,34 +14,33 @@ use glam::Vec3;
 pub(super) fn scatter(
     kind: MapKind,
     path: &mut LivePath,
-    model: &Model,
+    bsdf: &Bsdf,
     hit: &Interaction,
     d: Vec3,
     ns: Vec3,
     stored: &mut Vec<TracedPhoton>,
 ) -> Option<Vec3> {
-    let bsdf = Bsdf::new(model);
     // The surface's own side, not the ray's: a dielectric knows its inside by it.
     let frame = Frame::new(hit.shading_normal);
     let wo = frame.to_local(-d);
-    if bsdf.has(Part::Lambert) {
+    if bsdf.has(Part::Estimated) {
         store_photon(kind, path, hit.position, d, ns, stored);
     }
-    // The Lambert lobes (read from photons) or the followed ones (as a mirror is),
-    // chosen by their albedos; a caustic path ends where it turns diffuse.
-    let lambert = bsdf.weight(wo, Part::Lambert);
+    // The estimated lobes or the followed ones (as a mirror is), chosen by their albedos; a
+    // caustic path ends where it turns diffuse.
+    let estimated = bsdf.weight(wo, Part::Estimated);
     let followed = bsdf.weight(wo, Part::Followed);
-    if (lambert + followed).is_nan() || lambert + followed <= 0.0 {
+    if (estimated + followed).is_nan() || estimated + followed <= 0.0 {
         return None;
     }
-    let p_lambert = lambert / (lambert + followed);
-    let (part, chosen) = if path.rng.next_f32() < p_lambert {
-        (Part::Lambert, p_lambert)
+    let p_estimated = estimated / (estimated + followed);
+    let (part, chosen) = if path.rng.next_f32() < p_estimated {
+        (Part::Estimated, p_estimated)
     } else {
-        (Part::Followed, 1.0 - p_lambert)
+        (Part::Followed, 1.0 - p_estimated)
     };
     let ends_caustic = match part {
-        Part::Lambert => true,
+        Part::Estimated => true,
         _ => path.diffuse_seen,
     };
     if kind == MapKind::Caustic && ends_caustic {
@@ -54,7 +54,7 @@ pub(super) fn scatter(
         return None;
     }
     path.flux *= weight / survive;
-    if part == Part::Lambert {
+    if part == Part::Estimated {
         path.diffuse_seen = true;
     } else {
         path.specular_seen = true;

@@ -599,7 +599,8 @@ fn advance(
             next
         }
         Material::Bsdf(model) => {
-            match super::bsdf_scatter::scatter(kind, path, model, &hit, d, ns, stored) {
+            match super::bsdf_scatter::scatter(kind, path, &world.bsdf(model), &hit, d, ns, stored)
+            {
                 Some(next) => next,
                 None => return false,
             }

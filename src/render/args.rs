@@ -203,6 +203,18 @@ pub struct RenderArgs {
           help_heading = headings::EYE, hide_short_help = true)]
     pub edge_samples: u32,
 
+    /// Microfacet reflection at least this rough (Trowbridge–Reitz α) reads photons.
+    ///
+    /// A rough glossy lobe weighs each photon by its BSDF (so it shows a caustic that only
+    /// photons find, one lit by a point light) and sends its gather rays by sampling itself;
+    /// a smoother lobe is sampled and followed like a mirror, and light that focuses through
+    /// it reaches the caustic map. Below about 0.1 a lobe is too narrow for the photons of
+    /// one estimate (docs/materials.md, "The glossy threshold"); a value above every
+    /// roughness in the scene (e.g. 100) follows every glossy lobe.
+    #[arg(long, value_name = "ALPHA", default_value_t = crate::bsdf::ESTIMATED_MIN_ALPHA,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub glossy_min_alpha: f32,
+
     /// Final-gather rays per diffuse eye hit for indirect light (0: the global map directly).
     ///
     /// With 0, over progressive passes the global map's blotches average out and its corner

@@ -6,13 +6,13 @@
 //! environment it meets with the matching weight. Part of [`Integrator`]; owns that split,
 //! must not build maps or touch pixels.
 
+use super::gather::Reception;
 use super::integrator::{Emission, Integrator, Radiance};
 use crate::bsdf::{Bsdf, Model, Part};
 use crate::estimate::{Query, Scratch};
 use crate::sampling::{Frame, PathSampler};
 use crate::world::{Interaction, Surface};
 use glam::Vec3;
-use std::f32::consts::FRAC_1_PI;
 
 /// The balance heuristic's weight of a strategy of density `pdf` against another of `other`.
 #[inline]
@@ -39,7 +39,7 @@ impl Integrator<'_> {
         scratch: &mut Scratch,
     ) -> Radiance {
         let (ng, ns) = hit.facing(dir);
-        let bsdf = Bsdf::new(model);
+        let bsdf = self.world.bsdf(model);
         // The surface's own side, not the ray's: a dielectric knows its inside by it.
         let frame = Frame::new(hit.shading_normal);
         let wo = frame.to_local(-dir);
@@ -49,16 +49,14 @@ impl Integrator<'_> {
             direct: self.direct_bsdf(p, ns, &frame, wo, &bsdf, at, sampler),
             ..Radiance::default()
         };
-        if bsdf.has(Part::Lambert) {
-            let kd = bsdf.lambert_reflectance(wo);
+        if bsdf.has(Part::Estimated) {
+            let reception = Reception::of(&bsdf, frame, wo);
             let query = Query {
                 position: hit.position,
                 normal: ns,
             };
-            if let Some(c) = &self.caustics {
-                out.caustic = kd * FRAC_1_PI * c.irradiance(&query, scratch);
-            }
-            out.indirect = kd * self.indirect(p, ns, at, &query, sampler, scratch);
+            out.caustic = self.caustic(&reception, &query, scratch);
+            out.indirect = self.indirect(&reception, p, ns, at, &query, sampler, scratch);
         }
         if depth >= self.max_depth || !bsdf.has(Part::Followed) {
             return out;
@@ -138,7 +136,7 @@ impl Integrator<'_> {
                 if wi.z * wo.z <= 0.0 {
                     continue;
                 }
-                let mut f = bsdf.f(wo, wi, Part::Lambert);
+                let mut f = bsdf.f(wo, wi, Part::Estimated);
                 if followed {
                     let own = bsdf.pdf(wo, wi, Part::Followed);
                     f += bsdf.f(wo, wi, Part::Followed) * balance(count as f32 * s.pdf, own);

@@ -116,7 +116,7 @@ fn mean_direct_irradiance(world: &World, camera: &RayCamera, seed: u64) -> f32 {
             let Surface::Material(m) = closest.surface else {
                 return 0.0;
             };
-            if !world.material(m).is_diffuse_receiver() {
+            if !world.reads_photons(m) {
                 return 0.0;
             }
             let hit = world.resolve(closest);

@@ -6,11 +6,12 @@
 //! the film's layers. Knows nothing of passes or pixels: a camera path brings its own
 //! [`PathSampler`]. Owns shading; must not build maps or write images.
 
-use crate::bsdf::{Bsdf, Part};
+use super::gather::Reception;
+use crate::bsdf::Part;
 use crate::estimate::{PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
-use crate::sampling::{Frame, PathSampler, cosine_hemisphere};
+use crate::sampling::{Frame, PathSampler};
 use crate::scene::Material;
 use crate::world::{Interaction, Surface, World};
 use glam::Vec3;
@@ -74,12 +75,6 @@ pub struct EstimatedMap<'a> {
     pub estimate: &'a dyn RadianceEstimate,
 }
 
-impl EstimatedMap<'_> {
-    pub(super) fn irradiance(&self, query: &Query, scratch: &mut Scratch) -> Vec3 {
-        self.estimate.irradiance(self.map, query, scratch)
-    }
-}
-
 /// How indirect diffuse light is found.
 #[derive(Clone, Copy)]
 pub enum Indirect<'a> {
@@ -110,9 +105,6 @@ pub struct Integrator<'a> {
     /// the Fresnel reflectance as probability (the same expectation, fewer rays).
     pub glass_split_depth: u32,
 }
-
-/// Specular bounces a gather ray follows before giving up.
-const GATHER_SPECULAR_DEPTH: u32 = 4;
 
 /// Whether a camera path counts the light it sees along its specular chain itself: the
 /// emitters and the environment it meets before any diffuse surface.
@@ -200,14 +192,11 @@ impl Integrator<'_> {
                 };
                 let brdf = *albedo * FRAC_1_PI;
                 let at = sampler.next_diffuse_hit();
-                let caustic = match &self.caustics {
-                    Some(c) => brdf * c.irradiance(&query, scratch),
-                    None => Vec3::ZERO,
-                };
+                let reception = Reception::Lambert(*albedo);
                 Radiance {
                     direct: brdf * self.direct(p, ns, at, sampler),
-                    caustic,
-                    indirect: *albedo * self.indirect(p, ns, at, &query, sampler, scratch),
+                    caustic: self.caustic(&reception, &query, scratch),
+                    indirect: self.indirect(&reception, p, ns, at, &query, sampler, scratch),
                 }
             }
             Material::Mirror { tint } if depth < self.max_depth => {
@@ -297,7 +286,8 @@ impl Integrator<'_> {
             };
             let (ng, ns) = hit.facing(dir);
             let material = &self.world.material_at(m, &hit);
-            let Some((next, tint)) = sampled_specular(material, &hit, dir, ns, rng) else {
+            let Some((next, tint)) = sampled_specular(self.world, material, &hit, dir, ns, rng)
+            else {
                 return Vec3::ZERO;
             };
             throughput *= tint;
@@ -347,115 +337,13 @@ impl Integrator<'_> {
         }
         e
     }
-
-    /// Indirect irradiance/π at a diffuse point (to be multiplied by the albedo).
-    pub(super) fn indirect(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        at: u32,
-        query: &Query,
-        sampler: &mut PathSampler,
-        scratch: &mut Scratch,
-    ) -> Vec3 {
-        match &self.indirect {
-            Indirect::None => Vec3::ZERO,
-            // Shown directly, the map keeps its own estimate: one per eye hit costs little
-            // beside R gather rays, and the nearest precomputed point's piecewise-constant
-            // cells would be seen as such.
-            Indirect::Visualize(g) => g.irradiance(query, scratch) * FRAC_1_PI,
-            Indirect::FinalGather {
-                map,
-                rays,
-                precomputed,
-            } => {
-                let mut sum = Vec3::ZERO;
-                for j in 0..*rays {
-                    // Stratified over the R rays of this hit and across samples and passes.
-                    let d = cosine_hemisphere(n, sampler.gather_2d(at, j, *rays));
-                    sum += self.gathered(map, *precomputed, p, d, &mut sampler.rng, scratch);
-                }
-                // Cosine-weighted sampling: E/π is the mean incoming radiance.
-                sum / (*rays).max(1) as f32
-            }
-        }
-    }
-
-    /// Radiance from the global map seen along a gather ray (through a few specular bounces).
-    fn gathered(
-        &self,
-        map: &EstimatedMap,
-        precomputed: Option<&PrecomputedIrradiance>,
-        mut o: Vec3,
-        mut d: Vec3,
-        rng: &mut crate::sampling::Rng,
-        scratch: &mut Scratch,
-    ) -> Vec3 {
-        // What the specular bounces so far let through: their tints.
-        let mut throughput = Vec3::ONE;
-        // What the BSDF surfaces met on the way gave.
-        let mut gathered = Vec3::ZERO;
-        for _ in 0..=GATHER_SPECULAR_DEPTH {
-            let Some(hit) = self.world.intersect(o, d, 0.0, f32::INFINITY) else {
-                break;
-            };
-            // Direct light from emitters is already counted by the shadow rays.
-            let Surface::Material(m) = hit.surface else {
-                break;
-            };
-            let (ng, ns) = hit.facing(d);
-            let material = &self.world.material_at(m, &hit);
-            if let Material::Bsdf(model) = material {
-                // The Lambert lobes read the map; the others are followed, as a mirror is.
-                let bsdf = Bsdf::new(model);
-                let frame = Frame::new(hit.shading_normal);
-                let wo = frame.to_local(-d);
-                if bsdf.has(Part::Lambert) {
-                    let q = Query {
-                        position: hit.position,
-                        normal: ns,
-                    };
-                    let e = precomputed
-                        .and_then(|t| t.lookup(&q, scratch))
-                        .unwrap_or_else(|| map.irradiance(&q, scratch));
-                    gathered += throughput * bsdf.lambert_reflectance(wo) * FRAC_1_PI * e;
-                }
-                let Some(s) = bsdf.sample(wo, rng.next_f32(), rng.next_2d(), Part::Followed) else {
-                    break;
-                };
-                throughput *= s.f * (s.wi.z.abs() / s.pdf);
-                let next = frame.to_world(s.wi);
-                o = self.spawn(hit.position, ng, next);
-                d = next;
-                continue;
-            }
-            if let Material::Diffuse { albedo } = material {
-                let q = Query {
-                    position: hit.position,
-                    normal: ns,
-                };
-                // The full estimate where the table has no agreeing point (see
-                // `estimate::precomputed`).
-                let e = precomputed
-                    .and_then(|t| t.lookup(&q, scratch))
-                    .unwrap_or_else(|| map.irradiance(&q, scratch));
-                return gathered + throughput * *albedo * FRAC_1_PI * e;
-            }
-            let Some((next, tint)) = sampled_specular(material, &hit, d, ns, rng) else {
-                break;
-            };
-            throughput *= tint;
-            o = self.spawn(hit.position, ng, next);
-            d = next;
-        }
-        gathered
-    }
 }
 
 /// Where a path that meets `material` at `hit` along `dir` (shading normal `ns`, facing the
 /// ray) goes on, and the tint it takes: a mirror reflects; glass reflects or refracts, one
 /// branch chosen with the Fresnel reflectance as probability. `None` at a diffuse surface.
-fn sampled_specular(
+pub(super) fn sampled_specular(
+    world: &World,
     material: &Material,
     hit: &crate::world::Interaction,
     dir: Vec3,
@@ -467,7 +355,7 @@ fn sampled_specular(
         // Its delta lobes only: what a non-delta lobe sees is the camera path's own business.
         Material::Bsdf(model) => {
             let frame = Frame::new(hit.shading_normal);
-            let s = Bsdf::new(model).sample(
+            let s = world.bsdf(model).sample(
                 frame.to_local(-dir),
                 rng.next_f32(),
                 rng.next_2d(),

@@ -18,6 +18,7 @@ pub mod caustic_guide;
 pub mod emission;
 pub mod film;
 pub mod film_file;
+mod gather;
 pub mod integrator;
 pub mod memory_budget;
 pub mod merge;

@@ -78,6 +78,10 @@ pub struct RenderSettings {
     /// spread uniformly over their cones. Films written before it existed were unguided.
     #[serde(default)]
     pub guide_paths: u64,
+    /// Microfacet reflection at least this rough reads photons (`bsdf::Part::Estimated`).
+    /// Films written before it existed followed every glossy lobe.
+    #[serde(default = "follow_every_glossy_lobe")]
+    pub glossy_min_alpha: f32,
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
     pub estimator: EstimatorSettings,
@@ -86,6 +90,11 @@ pub struct RenderSettings {
 /// Films written before `glass-split-depth` existed split at every glass hit.
 fn split_everywhere() -> u32 {
     u32::MAX
+}
+
+/// Films written before `glossy-min-alpha` existed followed every glossy lobe.
+fn follow_every_glossy_lobe() -> f32 {
+    f32::MAX
 }
 
 /// The radii pass 0 resolves and every later pass scales.
@@ -400,7 +409,7 @@ impl KernelProbe<'_> {
         let Surface::Material(m) = hit.surface else {
             return ROUND;
         };
-        if !self.world.material(m).is_diffuse_receiver() {
+        if !self.world.reads_photons(m) {
             return ROUND;
         }
         let (_, n) = hit.facing(dir);

@@ -152,6 +152,12 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
             args.write_every
         ));
     }
+    if !(args.glossy_min_alpha >= 0.0 && args.glossy_min_alpha.is_finite()) {
+        return invalid(format!(
+            "--glossy-min-alpha {}: must be a finite roughness of at least 0",
+            args.glossy_min_alpha
+        ));
+    }
     if !(args.ppm_alpha > 0.0 && args.ppm_alpha < 1.0) {
         return invalid(format!("--ppm-alpha {}: must be in (0, 1)", args.ppm_alpha));
     }

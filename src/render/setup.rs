@@ -44,7 +44,9 @@ pub fn load_world(args: &RenderArgs, times: &mut PhaseTimes) -> Result<(World, u
     }
     report_load(args, &report, times);
     let scene_hash = store::scene_fingerprint(&description);
-    let world = times.time("build Embree scene", || World::new(description))?;
+    let world = times.time("build Embree scene", || {
+        World::with_glossy_min_alpha(description, args.glossy_min_alpha)
+    })?;
     Ok((world, scene_hash))
 }
 
@@ -188,7 +190,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let description = &world.description;
     let diffuse = |shapes: &[scene::Shape]| {
         (shapes.iter())
-            .filter(|s| world.material(s.material()).is_diffuse_receiver())
+            .filter(|s| world.reads_photons(s.material()))
             .count()
     };
     // Every placement of a prototype is an object of its own.
@@ -217,6 +219,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         } else {
             0
         },
+        glossy_min_alpha: args.glossy_min_alpha,
         alpha: args.ppm_alpha,
         estimator: args.estimate.settings_with_radius_k(DEFAULT_RADIUS_K),
     }

@@ -335,23 +335,26 @@ pub enum Material {
 }
 
 impl Material {
-    /// Whether photons stay on it (it has a Lambert lobe) and a camera path reads the photon
-    /// maps there.
-    pub fn is_diffuse_receiver(&self) -> bool {
+    /// Whether photons stay on it (it has a lobe read from photons, microfacet reflection
+    /// counting from `glossy_min_alpha`) and a camera path reads the photon maps there.
+    pub fn is_diffuse_receiver(&self, glossy_min_alpha: f32) -> bool {
         match self {
             Material::Diffuse { .. } => true,
             Material::Mirror { .. } | Material::Glass { .. } => false,
-            Material::Bsdf(model) => crate::bsdf::Bsdf::new(model).has(crate::bsdf::Part::Lambert),
+            Material::Bsdf(model) => crate::bsdf::Bsdf::split_at(model, glossy_min_alpha)
+                .has(crate::bsdf::Part::Estimated),
         }
     }
 
     /// Whether light leaving it can focus into a caustic: it has a lobe that is followed
-    /// rather than estimated from photons (a mirror, glass, a glossy coat).
-    pub fn makes_caustics(&self) -> bool {
+    /// rather than estimated from photons (a mirror, glass, a glossy coat smoother than
+    /// `glossy_min_alpha`).
+    pub fn makes_caustics(&self, glossy_min_alpha: f32) -> bool {
         match self {
             Material::Diffuse { .. } => false,
             Material::Mirror { .. } | Material::Glass { .. } => true,
-            Material::Bsdf(model) => crate::bsdf::Bsdf::new(model).has(crate::bsdf::Part::Followed),
+            Material::Bsdf(model) => crate::bsdf::Bsdf::split_at(model, glossy_min_alpha)
+                .has(crate::bsdf::Part::Followed),
         }
     }
 

@@ -51,10 +51,12 @@ pub(super) struct InstanceExtent {
 }
 
 impl Instancing {
-    /// Builds `description`'s prototypes on `device` and adds its instances to `top`.
+    /// Builds `description`'s prototypes on `device` and adds its instances to `top`; a
+    /// material makes caustics as [`crate::scene::Material::makes_caustics`] says at `glossy_min_alpha`.
     pub(super) fn build(
         device: &embree::Device,
         description: &SceneDescription,
+        glossy_min_alpha: f32,
         top: &mut SceneBuilder,
     ) -> Result<(Self, InstanceExtent), EmbreeError> {
         let mut instancing = Self::default();
@@ -78,7 +80,7 @@ impl Instancing {
                 parts.surfaces.push(Surface::Material(material));
                 parts.normals.push(normals);
                 (lo, hi) = (lo.min(a), hi.max(b));
-                if description.materials[material as usize].makes_caustics() {
+                if description.materials[material as usize].makes_caustics(glossy_min_alpha) {
                     (spec_lo, spec_hi) = (spec_lo.min(a), spec_hi.max(b));
                     specular.push(shape);
                 }

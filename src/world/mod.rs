@@ -188,10 +188,23 @@ pub struct World {
     sky_maps: Vec<LightSource>,
     /// The textured materials and the texture coordinates of their geometries.
     texturing: texturing::Texturing,
+    /// Microfacet reflection at least this rough (Trowbridge–Reitz α) reads photons; smoother
+    /// lobes are followed ([`crate::bsdf::Part`]).
+    pub glossy_min_alpha: f32,
 }
 
 impl World {
+    /// The world of `description`, its BSDFs split at [`crate::bsdf::ESTIMATED_MIN_ALPHA`].
     pub fn new(description: SceneDescription) -> Result<Self, EmbreeError> {
+        World::with_glossy_min_alpha(description, crate::bsdf::ESTIMATED_MIN_ALPHA)
+    }
+
+    /// The world of `description`, microfacet reflection at least `glossy_min_alpha` rough
+    /// read from photons and smoother lobes followed.
+    pub fn with_glossy_min_alpha(
+        description: SceneDescription,
+        glossy_min_alpha: f32,
+    ) -> Result<Self, EmbreeError> {
         let device = embree::Device::new()?;
         let mut builder = device.scene_builder()?;
         let mut surfaces = Vec::new();
@@ -205,7 +218,7 @@ impl World {
             normals.push(hit_normals);
             lo = lo.min(a);
             hi = hi.max(b);
-            if description.materials[material as usize].makes_caustics() {
+            if description.materials[material as usize].makes_caustics(glossy_min_alpha) {
                 spec_lo = spec_lo.min(a);
                 spec_hi = spec_hi.max(b);
                 specular_shapes.push(shape);
@@ -267,7 +280,8 @@ impl World {
             }
             surfaces.push(Surface::Light(i));
         }
-        let (instancing, extent) = Instancing::build(&device, &description, &mut builder)?;
+        let (instancing, extent) =
+            Instancing::build(&device, &description, glossy_min_alpha, &mut builder)?;
         for (a, b) in &extent.boxes {
             (lo, hi) = (lo.min(*a), hi.max(*b));
         }
@@ -338,7 +352,19 @@ impl World {
             light_sources,
             background,
             sky_maps,
+            glossy_min_alpha,
         })
+    }
+
+    /// `model`'s lobes at a hit, split as this world reads photons.
+    #[inline]
+    pub fn bsdf(&self, model: &crate::bsdf::Model) -> crate::bsdf::Bsdf {
+        crate::bsdf::Bsdf::split_at(model, self.glossy_min_alpha)
+    }
+
+    /// Whether photons stay on material `id` and camera paths read the maps there.
+    pub fn reads_photons(&self, id: u32) -> bool {
+        self.material(id).is_diffuse_receiver(self.glossy_min_alpha)
     }
 
     /// Offset for spawning rays off a surface: relative to the scene's size so the picture
@@ -414,7 +440,7 @@ impl World {
     pub fn has_diffuse(&self) -> bool {
         (self.surfaces.iter().copied())
             .chain(self.instancing.placed_surfaces())
-            .any(|s| matches!(s, Surface::Material(m) if self.material(m).is_diffuse_receiver()))
+            .any(|s| matches!(s, Surface::Material(m) if self.reads_photons(m)))
     }
 
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {

@@ -33,7 +33,10 @@ pub use scan::LeafRun;
 
 use super::classic::power_of;
 use super::kernel::RadialKernel;
-use super::{NORMAL_AGREEMENT_MIN_COS, Query, RadianceEstimate, Scratch, to_irradiance};
+use super::{
+    NORMAL_AGREEMENT_MIN_COS, Query, RadianceEstimate, Receiver, Scratch, to_irradiance,
+    weighed_power,
+};
 use crate::photon::PhotonMap;
 use crate::photon::map::GradientField;
 use glam::{DVec3, Vec3};
@@ -389,8 +392,40 @@ impl RadianceEstimate for DiffusionEstimate {
                 s
             }
         };
-        for (d, power) in &scratch.kernel_inputs {
+        for (d, power, _) in &scratch.kernel_inputs {
             sum += kernel.weight(metric.distance(d.as_dvec3())) * *power;
+        }
+        to_irradiance(sum * (tensor.plane_normalisation() / r2))
+    }
+
+    /// The same kernel over the same photons as [`DiffusionEstimate::irradiance`], photon by
+    /// photon (a glossy receiver is rare enough not to need the leaf moments and lanes).
+    fn reflected(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        receiver: &dyn Receiver,
+        scratch: &mut Scratch,
+    ) -> Vec3 {
+        let (tensor, _) = self.analyse(map, query, scratch);
+        let kernel = self.params.kernel.radial().prepare();
+        let r2 = sq(self.params.radius);
+        let metric = tensor.metric(r2);
+        let mut sum = DVec3::ZERO;
+        let mut add = |d: Vec3, slot: u32| {
+            let k = kernel.weight(metric.distance(d.as_dvec3()));
+            if k > 0.0 {
+                sum += k * weighed_power(map.attributes(slot), receiver);
+            }
+        };
+        for run in &scratch.kernel_runs {
+            for slot in run.slots.clone() {
+                let slot = slot as u32;
+                add(map.position(slot) - query.position, slot);
+            }
+        }
+        for &(d, _, slot) in &scratch.kernel_inputs {
+            add(d, slot);
         }
         to_irradiance(sum * (tensor.plane_normalisation() / r2))
     }

@@ -215,7 +215,7 @@ impl AnalysisSums {
         query: &Query,
         (leaf, slots): (usize, std::ops::Range<usize>),
         radii: &ScanRadii,
-        inputs: &mut Vec<(Vec3, DVec3)>,
+        inputs: &mut Vec<(Vec3, DVec3, u32)>,
     ) {
         let mut reader = PhotonReader::new(query.normal);
         for i in field.leaf_site_range(leaf) {
@@ -235,7 +235,7 @@ impl AnalysisSums {
                 field.channel_sums()[slot as usize],
                 radii,
             ) {
-                inputs.push((d, power_of(photon)));
+                inputs.push((d, power_of(photon), slot));
             }
         }
     }
