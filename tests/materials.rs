@@ -213,7 +213,9 @@ fn mtl_highlights_and_the_pbr_extension_become_bsdf_models() {
 /// the floor can find a point light), and the floor reflects it by its BSDF for the image's
 /// direction. Seen straight down by an orthographic camera, the caustic layer is
 /// f(up, towards the image)·I·cos θ/d² at each pixel, and the direct layer the same for the
-/// light itself: both against dpm's own BSDF, pixel by pixel over the central disc.
+/// light itself: both against dpm's own BSDF, pixel by pixel over the central disc. No ray
+/// is followed from the floor (`--max-depth 0`), so the floor's view of its own reflection in
+/// the mirror stays out.
 #[test]
 fn a_rough_floor_reflects_a_mirrored_point_light_through_its_caustic_photons() {
     let dir = tempfile::tempdir().unwrap();
@@ -251,6 +253,8 @@ fn a_rough_floor_reflects_a_mirrored_point_light_through_its_caustic_photons() {
         "200000",
         "--global-photons",
         "0",
+        "--max-depth",
+        "0",
     ];
     let outcome = dpm::render::pipeline::run(&support::render_args(&args)).unwrap();
     // Radiance from a point source of intensity 5 at `source` towards the camera (up).
@@ -283,4 +287,50 @@ fn a_rough_floor_reflects_a_mirrored_point_light_through_its_caustic_photons() {
             "{layer}: {sum_got:.4} against {sum_want:.4}"
         );
     }
+}
+
+/// The same rough floor, mirror and now a sphere light: the floor's lobe read from photons
+/// (the mirrored light from the caustic map, the rest by sampling the lobe in the mode that
+/// leaves the caustic map's paths out) and the floor's lobe followed (everything by sampling
+/// it, the mirrored light found through the mirror) are two consistent estimates of one
+/// image. They agree in the mean; light counted twice, or lost, between the caustic map and
+/// the sampled rays would part them.
+#[test]
+fn reading_a_rough_lobe_from_photons_or_following_it_renders_the_same_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "LookAt 0 1.5 0  0 0 0  0 0 1\n\
+         Camera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\n\
+         Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 24\nWorldBegin\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [8 8 8]\nTranslate 0.3 1 0\n\
+         Shape \"sphere\" \"float radius\" 0.1\nAttributeEnd\n\
+         AttributeBegin\nMaterial \"conductor\" \"rgb eta\" [0.2 0.9 1.1] \"rgb k\" [3.9 2.4 2.1] \
+         \"float roughness\" 0.3 \"bool remaproughness\" \"false\"\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+         \"point P\" [-4 0 -4  4 0 -4  4 0 4  -4 0 4]\nAttributeEnd\n\
+         AttributeBegin\nMaterial \"mirror\" \"rgb Kr\" [1 1 1]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+         \"point P\" [-1.5 2 -1.5  1.5 2 -1.5  1.5 2 1.5  -1.5 2 1.5]\nAttributeEnd\n";
+    let mean = |split: &str| {
+        let image = render(
+            dir.path(),
+            &format!("split-{split}.pbrt"),
+            text,
+            "5",
+            &[
+                "--glossy-min-alpha",
+                split,
+                "--max-depth",
+                "12",
+                "--spp",
+                "8",
+            ],
+        );
+        image_mean(&image)
+    };
+    let (read, followed) = (mean("0"), mean("100"));
+    eprintln!("read from photons {read:.5}, followed {followed:.5}");
+    assert!(
+        (read / followed - 1.0).abs() < 0.02,
+        "read from photons {read:.5}, followed {followed:.5}"
+    );
 }

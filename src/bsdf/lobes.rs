@@ -131,12 +131,20 @@ impl Lobe {
     /// what photons bring it.
     pub fn is_estimated(&self, min_alpha: f32) -> bool {
         match self {
-            Lobe::Lambert(_) | Lobe::CoatedBase { .. } | Lobe::FresnelBlend { .. } => true,
+            l if l.is_broad() => true,
             Lobe::Reflection { distribution, .. } => {
                 !distribution.is_smooth() && distribution.alpha.min_element() >= min_alpha
             }
             _ => false,
         }
+    }
+
+    /// Whether the lobe is about as wide as a Lambert lobe ([`super::Part::Broad`]).
+    pub fn is_broad(&self) -> bool {
+        matches!(
+            self,
+            Lobe::Lambert(_) | Lobe::CoatedBase { .. } | Lobe::FresnelBlend { .. }
+        )
     }
 
     pub fn is_delta(&self) -> bool {

@@ -8,8 +8,9 @@
 //! or know of photons.
 //!
 //! Which lobes a renderer estimates from photons and which it samples and follows: a [`Part`]
-//! splits a BSDF into its broad reflection lobes (Lambert, a coated Lambert base, the Fresnel
-//! blend, microfacet reflection at least [`ESTIMATED_MIN_ALPHA`] rough) and the rest.
+//! splits a BSDF into its broad lobes (Lambert, a coated Lambert base, the Fresnel blend), its
+//! glossy lobes rough enough to read photons (microfacet reflection at least
+//! [`ESTIMATED_MIN_ALPHA`] rough, or the threshold given to [`Bsdf::split_at`]) and the rest.
 //!
 //! Convention: no transmission lobe scales radiance by 1/η² (nor does dpm's smooth glass): on
 //! a closed object the factor on the way in cancels the one on the way out.
@@ -34,17 +35,24 @@ use glam::{Vec2, Vec3};
 use lobes::{Fresnel, Lobe};
 use microfacet::TrowbridgeReitz;
 
-/// Which lobes a call concerns.
+/// Which lobes a call concerns. A renderer reads photons at the [`Part::Estimated`] lobes and
+/// samples and follows the rest; of the estimated ones, the broad lobes read every photon map,
+/// while a glossy lobe reads the caustic map alone and samples what else reaches it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Part {
     /// Every lobe.
     All,
-    /// The broad reflection lobes: Lambert, the coated Lambert base, the Fresnel blend and
-    /// microfacet reflection at least [`ESTIMATED_MIN_ALPHA`] rough; what a renderer reads
-    /// from photons, each weighed by f for its direction.
+    /// The lobes that receive photons: [`Part::Broad`] and [`Part::Glossy`].
     Estimated,
-    /// Every other lobe: specular, narrow microfacet, transmission, which a renderer samples
-    /// and follows.
+    /// Lambert reflection, the coated Lambert base and the Fresnel blend: lobes about as wide
+    /// as a Lambert lobe, whose light a photon estimate gives whatever its paths.
+    Broad,
+    /// Microfacet reflection at least as rough as the split's threshold
+    /// ([`ESTIMATED_MIN_ALPHA`] by default): its caustics come from photons, weighed by f
+    /// for each photon's direction; the rest of its light is sampled.
+    Glossy,
+    /// Every other lobe (specular, smoother microfacet reflection, transmission), which a
+    /// renderer samples and follows as it would a mirror.
     Followed,
 }
 
@@ -257,6 +265,8 @@ impl Bsdf {
         self.lobes[..self.count].iter().filter(move |l| match part {
             Part::All => true,
             Part::Estimated => l.is_estimated(min_alpha),
+            Part::Broad => l.is_broad(),
+            Part::Glossy => !l.is_broad() && l.is_estimated(min_alpha),
             Part::Followed => !l.is_estimated(min_alpha),
         })
     }
@@ -374,12 +384,12 @@ impl Bsdf {
         self.lobes(Part::All).all(Lobe::is_delta)
     }
 
-    /// The summed reflectance of the [`Part::Estimated`] lobes when every one of them is a
-    /// Lambert lobe (their f is that over π whatever the directions): the receiver then needs
+    /// The summed reflectance of the lobes in `part` when every one of them is a Lambert lobe
+    /// (their f is that over π whatever the directions): a photon estimate there needs
     /// irradiance only, not each photon's direction.
-    pub fn estimated_lambert(&self) -> Option<Vec3> {
+    pub fn lambert_reflectance(&self, part: Part) -> Option<Vec3> {
         let mut sum = Vec3::ZERO;
-        for lobe in self.lobes(Part::Estimated) {
+        for lobe in self.lobes(part) {
             match lobe {
                 Lobe::Lambert(r) => sum += *r,
                 _ => return None,

@@ -229,7 +229,13 @@ fn samples_carry_the_values_and_densities_that_evaluation_gives() {
     for (name, model) in models() {
         let bsdf = Bsdf::new(&model);
         for wo in views(&model) {
-            for part in [Part::All, Part::Followed, Part::Estimated] {
+            for part in [
+                Part::All,
+                Part::Followed,
+                Part::Estimated,
+                Part::Broad,
+                Part::Glossy,
+            ] {
                 for _ in 0..200 {
                     let Some(s) = bsdf.sample(wo, r.next_f32(), r.next_2d(), part) else {
                         continue;

@@ -1,10 +1,13 @@
 //! The eye pass at a surface with a BSDF model (pbrt's plastic, uber, rough metals and glass,
-//! …): its Lambert lobes read the caustic and global maps exactly as a diffuse surface does;
-//! direct light comes from shadow rays over every non-delta lobe, weighed against the BSDF's
-//! own samples by multiple importance sampling (the balance heuristic, counting each light's
-//! samples); its other lobes are followed by one BSDF sample, whose ray counts the emitter or
-//! environment it meets with the matching weight. Part of [`Integrator`]; owns that split,
-//! must not build maps or touch pixels.
+//! …). Its lobes come in three parts ([`Part`]): broad lobes (Lambert, a coated base, the
+//! Fresnel blend) read the caustic and global maps as a diffuse surface does; glossy lobes
+//! rough enough to read photons read the caustic map, each photon weighed by f for its
+//! direction, and sample the rest of their light by one ray that leaves the caustic map's
+//! paths to it ([`Emission::CausticMap`]); followed lobes are sampled by one ray, as a
+//! mirror is. Direct light comes from shadow rays over every non-delta lobe, weighed against
+//! each sampled part's own samples by multiple importance sampling (the balance heuristic,
+//! counting each light's samples). Part of [`Integrator`]; owns that split, must not build
+//! maps or touch pixels.
 
 use super::gather::Reception;
 use super::integrator::{Emission, Integrator, Radiance};
@@ -26,6 +29,25 @@ fn balance(pdf: f32, other: f32) -> f32 {
     }
 }
 
+/// Where a BSDF hit is and how it is seen.
+struct At<'h> {
+    hit: &'h Interaction,
+    frame: Frame,
+    wo: Vec3,
+    /// Off the surface on the side the ray came from.
+    p: Vec3,
+    /// The geometric and shading normals facing the ray.
+    ng: Vec3,
+    ns: Vec3,
+}
+
+/// Which sampled parts of a BSDF direct light is weighed against.
+#[derive(Clone, Copy)]
+struct Sampled {
+    glossy: bool,
+    followed: bool,
+}
+
 impl Integrator<'_> {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn shade_bsdf(
@@ -43,60 +65,138 @@ impl Integrator<'_> {
         // The surface's own side, not the ray's: a dielectric knows its inside by it.
         let frame = Frame::new(hit.shading_normal);
         let wo = frame.to_local(-dir);
-        let at = sampler.next_diffuse_hit();
-        let p = self.offset(hit.position, ng);
+        let at = At {
+            hit,
+            frame,
+            wo,
+            p: self.offset(hit.position, ng),
+            ng,
+            ns,
+        };
+        let diffuse_hit = sampler.next_diffuse_hit();
+        // Light reaching the followed lobes from emitters is the caustic map's when the path
+        // came from a glossy lobe that reads it.
+        let followed_lit = emission != Emission::CausticMap;
+        let deeper = depth < self.max_depth;
+        let sampled = Sampled {
+            glossy: deeper && bsdf.has(Part::Glossy),
+            followed: deeper && followed_lit && bsdf.has(Part::Followed),
+        };
         let mut out = Radiance {
-            direct: self.direct_bsdf(p, ns, &frame, wo, &bsdf, at, sampler),
+            direct: self.direct_bsdf(&at, &bsdf, sampled, followed_lit, diffuse_hit, sampler),
             ..Radiance::default()
         };
         if bsdf.has(Part::Estimated) {
-            let reception = Reception::of(&bsdf, frame, wo);
             let query = Query {
                 position: hit.position,
                 normal: ns,
             };
-            out.caustic = self.caustic(&reception, &query, scratch);
-            out.indirect = self.indirect(&reception, p, ns, at, &query, sampler, scratch);
+            let caustic = Reception::of(&bsdf, Part::Estimated, frame, wo);
+            out.caustic = self.caustic(&caustic, &query, scratch);
+            if bsdf.has(Part::Broad) {
+                let broad = Reception::of(&bsdf, Part::Broad, frame, wo);
+                out.indirect =
+                    self.indirect(&broad, at.p, ns, diffuse_hit, &query, sampler, scratch);
+            }
         }
-        if depth >= self.max_depth || !bsdf.has(Part::Followed) {
+        if !deeper {
             return out;
         }
+        if sampled.glossy {
+            // What reaches a glossy lobe past the caustic map: emitters seen directly (weighed
+            // against the shadow rays) and whatever a surface that reads photons sends.
+            let modes = (Emission::CausticMap, Emission::CausticMap);
+            out += self.sample_part(
+                &at,
+                &bsdf,
+                Part::Glossy,
+                depth,
+                modes,
+                true,
+                sampler,
+                scratch,
+            );
+        }
+        if bsdf.has(Part::Followed) {
+            let after = if followed_lit {
+                Emission::Counted
+            } else {
+                Emission::CausticMap
+            };
+            let modes = (emission, after);
+            out += self.sample_part(
+                &at,
+                &bsdf,
+                Part::Followed,
+                depth,
+                modes,
+                followed_lit,
+                sampler,
+                scratch,
+            );
+        }
+        out
+    }
+
+    /// Radiance arriving along one sample of `bsdf`'s `part`, times the sample's weight: a
+    /// delta lobe's ray goes on in mode `along` (the path's own, for a specular chain); a
+    /// non-delta lobe's ray counts the emitter or environment it meets first (when `lit`,
+    /// weighed against the shadow rays) and shades anything else in mode `after`.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_part(
+        &self,
+        at: &At,
+        bsdf: &Bsdf,
+        part: Part,
+        depth: u32,
+        (along, after): (Emission, Emission),
+        lit: bool,
+        sampler: &mut PathSampler,
+        scratch: &mut Scratch,
+    ) -> Radiance {
         let (u_lobe, u) = (sampler.rng.next_f32(), sampler.rng.next_2d());
-        let Some(s) = bsdf.sample(wo, u_lobe, u, Part::Followed) else {
-            return out;
+        let Some(s) = bsdf.sample(at.wo, u_lobe, u, part) else {
+            return Radiance::default();
         };
         let weight = s.f * (s.wi.z.abs() / s.pdf);
         if weight.max_element() <= 0.0 || !weight.is_finite() {
-            return out;
+            return Radiance::default();
         }
-        let next = frame.to_world(s.wi);
-        let origin = self.spawn(hit.position, ng, next);
+        let next = at.frame.to_world(s.wi);
+        let origin = self.spawn(at.hit.position, at.ng, next);
         if s.delta {
-            out += weight * self.trace(origin, next, depth + 1, emission, sampler, scratch);
-            return out;
+            return weight * self.trace(origin, next, depth + 1, along, sampler, scratch);
         }
-        // A non-delta lobe's ray: what it meets first is weighed against the shadow rays.
         let Some(found) = self.world.intersect(origin, next, 0.0, f32::INFINITY) else {
             let mut sky = Vec3::ZERO;
-            for light in &self.world.light_sources {
-                let radiance = light.radiance_at_infinity() + light.sky_radiance(next);
-                if radiance != Vec3::ZERO {
-                    let light_pdf = light.incident_pdf(p, ns, next, f32::INFINITY, Vec3::ZERO);
-                    sky += radiance * balance(s.pdf, self.samples_of(light) * light_pdf);
+            if lit {
+                for light in &self.world.light_sources {
+                    let radiance = light.radiance_at_infinity() + light.sky_radiance(next);
+                    if radiance != Vec3::ZERO {
+                        let light_pdf =
+                            light.incident_pdf(at.p, at.ns, next, f32::INFINITY, Vec3::ZERO);
+                        sky += radiance * balance(s.pdf, self.samples_of(light) * light_pdf);
+                    }
                 }
             }
-            out.direct += weight * sky;
-            return out;
+            return Radiance {
+                direct: weight * sky,
+                ..Radiance::default()
+            };
         };
         if let Surface::Light(l) = found.surface {
+            if !lit {
+                return Radiance::default();
+            }
             let light = &self.world.light_sources[l];
             let emitted = light.emitted_radiance(-next.dot(found.geometric_normal));
-            let light_pdf = light.incident_pdf(p, ns, next, found.t, found.geometric_normal);
-            out.direct += weight * emitted * balance(s.pdf, self.samples_of(light) * light_pdf);
-            return out;
+            let light_pdf = light.incident_pdf(at.p, at.ns, next, found.t, found.geometric_normal);
+            return Radiance {
+                direct: weight * emitted * balance(s.pdf, self.samples_of(light) * light_pdf),
+                ..Radiance::default()
+            };
         }
-        out += weight * self.shade(&found, next, depth + 1, Emission::Counted, sampler, scratch);
-        out
+        weight * self.shade(&found, next, depth + 1, after, sampler, scratch)
     }
 
     /// Shadow rays a light takes at each hit.
@@ -108,38 +208,47 @@ impl Integrator<'_> {
         }
     }
 
-    /// Reflected direct radiance at `p` (offset off the surface on the side the ray came
-    /// from, whose normal is `n`): every non-delta lobe by shadow rays, the followed lobes'
-    /// share weighed against their own samples. Light from the other side reaches the
-    /// transmitting lobes by their own samples alone.
-    #[allow(clippy::too_many_arguments)]
+    /// Reflected direct radiance at `at`: every non-delta lobe by shadow rays (the followed
+    /// lobes only when `followed_lit`), each `sampled` part's share weighed against its own
+    /// samples. Light from the other side reaches the transmitting lobes by their own samples
+    /// alone.
     fn direct_bsdf(
         &self,
-        p: Vec3,
-        n: Vec3,
-        frame: &Frame,
-        wo: Vec3,
+        at: &At,
         bsdf: &Bsdf,
-        at: u32,
+        sampled: Sampled,
+        followed_lit: bool,
+        diffuse_hit: u32,
         sampler: &mut PathSampler,
     ) -> Vec3 {
-        let followed = bsdf.has(Part::Followed);
+        let (p, n, wo) = (at.p, at.ns, at.wo);
         let mut radiance = Vec3::ZERO;
         for (l, light) in self.world.light_sources.iter().enumerate() {
             let count = self.samples_of(light) as u32;
             let mut sum = Vec3::ZERO;
             for j in 0..count {
-                let Some(s) = light.sample_incident(p, n, sampler.light_2d(at, l, j, count)) else {
+                let u = sampler.light_2d(diffuse_hit, l, j, count);
+                let Some(s) = light.sample_incident(p, n, u) else {
                     continue;
                 };
-                let wi = frame.to_local(s.direction);
+                let wi = at.frame.to_local(s.direction);
                 if wi.z * wo.z <= 0.0 {
                     continue;
                 }
-                let mut f = bsdf.f(wo, wi, Part::Estimated);
-                if followed {
-                    let own = bsdf.pdf(wo, wi, Part::Followed);
-                    f += bsdf.f(wo, wi, Part::Followed) * balance(count as f32 * s.pdf, own);
+                let light_pdf = count as f32 * s.pdf;
+                let mut f = bsdf.f(wo, wi, Part::Broad);
+                for (part, is_sampled, is_lit) in [
+                    (Part::Glossy, sampled.glossy, true),
+                    (Part::Followed, sampled.followed, followed_lit),
+                ] {
+                    if !is_lit {
+                        continue;
+                    }
+                    let mut g = bsdf.f(wo, wi, part);
+                    if is_sampled && g != Vec3::ZERO {
+                        g *= balance(light_pdf, bsdf.pdf(wo, wi, part));
+                    }
+                    f += g;
                 }
                 if f.max_element() <= 0.0 {
                     continue;

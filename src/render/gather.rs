@@ -1,10 +1,10 @@
 //! What a camera path reads from the photon maps where it meets a surface that keeps photons:
 //! the caustic estimate and the indirect light (final gathering, reading the precomputed
-//! irradiance where there is one, or the global map shown directly). A Lambert surface reads
-//! irradiance and scales it by its albedo/π; a surface with broad glossy lobes
-//! ([`crate::bsdf::Part::Estimated`]) weighs each photon by its BSDF for the photon's
-//! direction and sends its gather rays by sampling those lobes. Part of [`Integrator`]; owns
-//! that reading, must not build maps or touch pixels.
+//! irradiance where there is one, or the global map shown directly). Lambert lobes read
+//! irradiance and scale it by their albedo/π; other lobes that read photons weigh each photon
+//! by their BSDF for the photon's direction ([`Reception`]) and send their gather rays by
+//! sampling themselves. Part of [`Integrator`]; owns that reading, must not build maps or
+//! touch pixels.
 
 use super::integrator::{EstimatedMap, Indirect, Integrator, sampled_specular};
 use crate::bsdf::{Bsdf, Part};
@@ -23,24 +23,30 @@ const GATHER_SPECULAR_DEPTH: u32 = 4;
 pub(super) enum Reception<'b> {
     /// Lambert lobes of this summed reflectance: f = reflectance/π whatever the directions.
     Lambert(Vec3),
-    /// The estimated lobes of a BSDF, some of them glossy, seen from one direction.
+    /// Some lobes of a BSDF, not all Lambert, seen from one direction.
     Glossy(GlossyReceiver<'b>),
 }
 
 impl<'b> Reception<'b> {
-    /// How `bsdf`'s estimated lobes read photons, seen from `wo` (local to `frame`).
-    pub(super) fn of(bsdf: &'b Bsdf, frame: Frame, wo: Vec3) -> Self {
-        match bsdf.estimated_lambert() {
+    /// How the lobes of `bsdf` in `part` read photons, seen from `wo` (local to `frame`).
+    pub(super) fn of(bsdf: &'b Bsdf, part: Part, frame: Frame, wo: Vec3) -> Self {
+        match bsdf.lambert_reflectance(part) {
             Some(reflectance) => Reception::Lambert(reflectance),
-            None => Reception::Glossy(GlossyReceiver { bsdf, frame, wo }),
+            None => Reception::Glossy(GlossyReceiver {
+                bsdf,
+                part,
+                frame,
+                wo,
+            }),
         }
     }
 }
 
-/// A BSDF's estimated lobes seen from `wo`: f for each photon's direction.
+/// Some lobes of a BSDF seen from `wo`: their f for each photon's direction.
 #[derive(Clone, Copy)]
 pub(super) struct GlossyReceiver<'b> {
     bsdf: &'b Bsdf,
+    part: Part,
     frame: Frame,
     wo: Vec3,
 }
@@ -49,7 +55,7 @@ impl Receiver for GlossyReceiver<'_> {
     #[inline]
     fn bsdf(&self, travel: Vec3) -> Vec3 {
         let wi = self.frame.to_local(-travel);
-        self.bsdf.f(self.wo, wi, Part::Estimated)
+        self.bsdf.f(self.wo, wi, self.part)
     }
 }
 
@@ -138,7 +144,7 @@ impl Integrator<'_> {
                     let u = sampler.gather_2d(at, j, *rays);
                     let u_lobe = sampler.rng.next_f32();
                     let bsdf = receiver.bsdf;
-                    let Some(s) = bsdf.sample(receiver.wo, u_lobe, u, Part::Estimated) else {
+                    let Some(s) = bsdf.sample(receiver.wo, u_lobe, u, receiver.part) else {
                         continue;
                     };
                     let weight = s.f * (s.wi.z.abs() / s.pdf);
@@ -196,7 +202,7 @@ impl Integrator<'_> {
                 let wo = frame.to_local(-d);
                 if bsdf.has(Part::Estimated) {
                     gathered += throughput
-                        * match Reception::of(&bsdf, frame, wo) {
+                        * match Reception::of(&bsdf, Part::Estimated, frame, wo) {
                             Reception::Lambert(r) => r * FRAC_1_PI * irradiance(scratch),
                             glossy => {
                                 let q = Query {

@@ -113,12 +113,16 @@ pub enum Emission {
     Counted,
     /// Left to [`Integrator::emitted`]'s own samples of the pixel (see `render::emission`).
     Elsewhere,
+    /// The path left a glossy lobe that reads the caustic map: light that reaches it through
+    /// mirrors, glass and followed lobes alone (emitters seen, and direct light at followed
+    /// lobes) is that map's, and only a surface that reads photons brings more.
+    CausticMap,
 }
 
 impl Emission {
     /// Emitted radiance `e` that a camera path sees, as this mode counts it.
     #[inline]
-    fn counted(self, e: Vec3) -> Radiance {
+    pub(super) fn counted(self, e: Vec3) -> Radiance {
         Radiance {
             direct: if self == Emission::Counted {
                 e
