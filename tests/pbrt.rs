@@ -597,3 +597,32 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn coated_layers_warn_where_dpm_approximates_them_and_strict_refuses_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "Material \"coatedconductor\" \"float conductor.roughness\" 0.2",
+            "returns",
+        ),
+        (
+            "Material \"coateddiffuse\" \"rgb albedo\" [0.5 0.5 0.5] \"float thickness\" 0.1",
+            "medium",
+        ),
+    ];
+    for (material, why) in cases {
+        let text = world(&format!("{material}\nShape \"sphere\"\n"));
+        let (_, report) = loads(&text);
+        let warned: Vec<_> = (report.warnings.iter())
+            .filter(|w| w.contains(why))
+            .collect();
+        assert_eq!(warned.len(), 1, "{material}: {:?}", report.warnings);
+        let path = write_scene(dir.path(), "coat.pbrt", &text);
+        let e = scene::load_with_options(&path, &LoadOptions { strict: true }).unwrap_err();
+        assert!(e.message.contains("--strict") && e.line == Some(6), "{e}");
+    }
+    // A coated diffuse without a medium is within 0.03 of pbrt-v4's walk: no warning.
+    let (_, report) = loads(&world("Material \"coateddiffuse\"\nShape \"sphere\"\n"));
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}

@@ -5,6 +5,7 @@
 //! the same lobe mirrored); the dielectric's sides are its outside (+z) and inside. Owns the
 //! lobes' formulas; must not know which lobes a material has.
 
+use super::coated::CoatedConductor;
 use super::fresnel;
 use super::microfacet::TrowbridgeReitz;
 use crate::sampling::cosine_hemisphere;
@@ -46,14 +47,14 @@ pub enum Lobe {
     Lambert(Vec3),
     /// Lambert transmission of `t` (to the other side).
     LambertTransmission(Vec3),
-    /// Microfacet reflection scaled by `scale` with Fresnel `fresnel` (a mirror when smooth);
-    /// under a smooth coat of index `coat` (0: none), times the coat's transmission in and out.
+    /// Microfacet reflection scaled by `scale` with Fresnel `fresnel` (a mirror when smooth).
     Reflection {
         scale: Vec3,
         fresnel: Fresnel,
         distribution: TrowbridgeReitz,
-        coat: f32,
     },
+    /// A conductor seen through a smooth dielectric coat ([`CoatedConductor`]).
+    CoatedConductor(CoatedConductor),
     /// A dielectric interface of index `eta` (inside over outside, outside +z): microfacet
     /// (or, smooth, specular) reflection scaled by `reflect` and transmission by `transmit`.
     Dielectric {
@@ -86,16 +87,6 @@ pub enum Lobe {
         thickness: f32,
         inner: f32,
     },
-}
-
-/// What a smooth coat of index `coat` lets through at `cos` (1 without a coat).
-#[inline]
-fn coat_transmission(cos: f32, coat: f32) -> f32 {
-    if coat == 0.0 {
-        1.0
-    } else {
-        1.0 - fresnel::dielectric(cos.abs(), coat)
-    }
 }
 
 /// Both directions mirrored to the upper side when `wo` comes from below (a two-sided lobe).
@@ -132,7 +123,8 @@ impl Lobe {
     pub fn is_estimated(&self, min_alpha: f32) -> bool {
         match self {
             l if l.is_broad() => true,
-            Lobe::Reflection { distribution, .. } => {
+            Lobe::Reflection { distribution, .. }
+            | Lobe::CoatedConductor(CoatedConductor { distribution, .. }) => {
                 !distribution.is_smooth() && distribution.alpha.min_element() >= min_alpha
             }
             _ => false,
@@ -149,7 +141,9 @@ impl Lobe {
 
     pub fn is_delta(&self) -> bool {
         match self {
-            Lobe::Reflection { distribution, .. } | Lobe::Dielectric { distribution, .. } => {
+            Lobe::Reflection { distribution, .. }
+            | Lobe::Dielectric { distribution, .. }
+            | Lobe::CoatedConductor(CoatedConductor { distribution, .. }) => {
                 distribution.is_smooth()
             }
             Lobe::SpecularTransmission { .. } | Lobe::ThinDielectric { .. } => true,
@@ -164,12 +158,8 @@ impl Lobe {
         match *self {
             Lobe::Lambert(r) => r.max_element(),
             Lobe::LambertTransmission(t) => t.max_element(),
-            Lobe::Reflection {
-                scale,
-                fresnel,
-                coat,
-                ..
-            } => (scale * fresnel.at(c)).max_element() * coat_transmission(c, coat),
+            Lobe::Reflection { scale, fresnel, .. } => (scale * fresnel.at(c)).max_element(),
+            Lobe::CoatedConductor(coated) => coated.weight(Vec3::new(wo.x, wo.y, c)),
             Lobe::Dielectric {
                 eta,
                 reflect,
@@ -211,7 +201,6 @@ impl Lobe {
                 scale,
                 fresnel,
                 distribution,
-                coat,
             } => {
                 let (wo, wi) = upper(wo, wi);
                 if distribution.is_smooth() || wi.z <= 0.0 || wo.z <= 0.0 {
@@ -221,10 +210,15 @@ impl Lobe {
                 if m == Vec3::ZERO {
                     return Vec3::ZERO;
                 }
-                let value = distribution.d(m) * distribution.g(wo, wi) / (4.0 * wo.z * wi.z)
-                    * coat_transmission(wo.z, coat)
-                    * coat_transmission(wi.z, coat);
+                let value = distribution.d(m) * distribution.g(wo, wi) / (4.0 * wo.z * wi.z);
                 scale * fresnel.at(wo.dot(m)) * value
+            }
+            Lobe::CoatedConductor(coated) => {
+                let (wo, wi) = upper(wo, wi);
+                if coated.distribution.is_smooth() || wi.z <= 0.0 || wo.z <= 0.0 {
+                    return Vec3::ZERO;
+                }
+                coated.f(wo, wi)
             }
             Lobe::Dielectric {
                 eta,
@@ -308,6 +302,13 @@ impl Lobe {
                 let m = (wo + wi).normalize_or_zero();
                 distribution.visible_d(wo, m) / (4.0 * wo.dot(m).abs().max(1e-12))
             }
+            Lobe::CoatedConductor(coated) => {
+                let (wo, wi) = upper(wo, wi);
+                if coated.distribution.is_smooth() || wi.z <= 0.0 || wo.z <= 0.0 {
+                    return 0.0;
+                }
+                coated.pdf(wo, wi)
+            }
             Lobe::Dielectric {
                 eta,
                 reflect,
@@ -349,16 +350,26 @@ impl Lobe {
         match *self {
             Lobe::Lambert(_) | Lobe::CoatedBase { .. } => non_delta(cosine(wo.z)?),
             Lobe::LambertTransmission(_) => non_delta(cosine(-wo.z)?),
+            Lobe::CoatedConductor(coated) => {
+                let up = if wo.z < 0.0 { -wo } else { wo };
+                if coated.distribution.is_smooth() {
+                    return Some(LobeSample {
+                        wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                        f: coated.mirror_weight(up) / up.z.max(1e-12),
+                        pdf: 1.0,
+                        delta: true,
+                    });
+                }
+                non_delta(flip_to(coated.sample(up, u)?, wo.z))
+            }
             Lobe::Reflection {
                 scale,
                 fresnel,
                 distribution,
-                coat,
             } => {
                 if distribution.is_smooth() {
                     let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-                    let through = coat_transmission(wo.z.abs(), coat).powi(2);
-                    let f = scale * fresnel.at(wo.z) * through / wo.z.abs().max(1e-12);
+                    let f = scale * fresnel.at(wo.z) / wo.z.abs().max(1e-12);
                     return Some(LobeSample {
                         wi,
                         f,

@@ -15,6 +15,7 @@
 //! Convention: no transmission lobe scales radiance by 1/η² (nor does dpm's smooth glass): on
 //! a closed object the factor on the way in cancels the one on the way out.
 
+mod coated;
 pub mod fresnel;
 mod lobes;
 pub mod microfacet;
@@ -105,7 +106,6 @@ impl Bsdf {
                     scale: ks,
                     fresnel: Fresnel::Dielectric(COAT_ETA),
                     distribution: tr(alpha),
-                    coat: 0.0,
                 });
             }
             Model::Uber {
@@ -126,13 +126,11 @@ impl Bsdf {
                     scale: opacity * ks,
                     fresnel: Fresnel::Dielectric(eta),
                     distribution: tr(alpha),
-                    coat: 0.0,
                 });
                 b.push(Lobe::Reflection {
                     scale: opacity * kr,
                     fresnel: Fresnel::Dielectric(eta),
                     distribution: tr(Vec2::ZERO),
-                    coat: 0.0,
                 });
                 b.push(Lobe::SpecularTransmission {
                     scale: opacity * kt,
@@ -164,7 +162,6 @@ impl Bsdf {
                 scale: Vec3::ONE,
                 fresnel: Fresnel::Conductor { eta, k },
                 distribution: tr(alpha),
-                coat: 0.0,
             }),
             Model::Dielectric {
                 eta,
@@ -189,7 +186,6 @@ impl Bsdf {
                     scale: Vec3::ONE,
                     fresnel: Fresnel::Dielectric(eta),
                     distribution: tr(alpha),
-                    coat: 0.0,
                 });
                 b.push(Lobe::CoatedBase {
                     rho: reflectance,
@@ -211,19 +207,15 @@ impl Bsdf {
                     scale: Vec3::ONE,
                     fresnel: Fresnel::Dielectric(interface_eta),
                     distribution: tr(interface_alpha),
-                    coat: 0.0,
                 });
-                // The conductor seen through the coat: its index relative to the coat's, the
-                // light the coat lets in and out, attenuated by the layer there and back.
-                b.push(Lobe::Reflection {
-                    scale: Vec3::splat((-2.0 * thickness).exp()),
-                    fresnel: Fresnel::Conductor {
-                        eta: conductor_eta / interface_eta,
-                        k: conductor_k / interface_eta,
-                    },
+                // The conductor seen through the coat, its index relative to the coat's.
+                b.push(Lobe::CoatedConductor(coated::CoatedConductor {
+                    eta: conductor_eta / interface_eta,
+                    k: conductor_k / interface_eta,
                     distribution: tr(conductor_alpha.max(interface_alpha)),
                     coat: interface_eta,
-                });
+                    thickness,
+                }));
             }
             Model::DiffuseTransmission {
                 reflectance,
@@ -252,6 +244,7 @@ impl Bsdf {
             } => reflect.max_element() <= 0.0 && transmit.max_element() <= 0.0,
             Lobe::FresnelBlend { rd, rs, .. } => rd.max_element() <= 0.0 && rs.max_element() <= 0.0,
             Lobe::CoatedBase { rho, .. } => rho.max_element() <= 0.0,
+            Lobe::CoatedConductor(_) => false,
             Lobe::ThinDielectric { .. } => false,
         };
         if !zero && self.count < MAX_LOBES {

@@ -221,6 +221,9 @@ impl Mapper<'_> {
             }
         };
         let mut mapped = mapped;
+        if let Material::Bsdf(model) = &mapped.material {
+            mapped.approximation = mapped.approximation.or_else(|| approximation(kind, model));
+        }
         mapped.textures = (textured.into_inner().into_iter())
             .filter_map(|(name, texture)| {
                 textured_parameter(&mapped.material, &name).map(|parameter| (parameter, texture))
@@ -233,6 +236,25 @@ impl Mapper<'_> {
             }
         }
         Ok(mapped)
+    }
+}
+
+/// Why dpm's model of pbrt material `kind` is an approximation, when it is one
+/// (docs/materials.md measures each against pbrt-v4's random walk).
+fn approximation(kind: &str, model: &crate::bsdf::Model) -> Option<String> {
+    use crate::bsdf::Model;
+    match model {
+        Model::CoatedDiffuse { albedo, .. } | Model::CoatedConductor { albedo, .. }
+            if albedo.max_element() > 0.0 =>
+        {
+            Some(format!(
+                "material \"{kind}\": the medium between coat and base (\"albedo\", \"g\") is not modelled; the layer only attenuates"
+            ))
+        }
+        Model::CoatedConductor { .. } => Some(format!(
+            "material \"{kind}\": light the coat returns to the conductor is followed at the angle it left, not scattered (up to 0.14 of the albedo on a rough bright metal)"
+        )),
+        _ => None,
     }
 }
 
