@@ -26,6 +26,10 @@ pub struct LobeSample {
 pub enum Fresnel {
     /// A dielectric of this index (inside over outside), seen from outside.
     Dielectric(f32),
+    /// A dielectric of this index seen from inside, totally reflecting past its critical
+    /// angle: pbrt-v3's `plastic` coat, whose indices are swapped (pbrt-v3 issue #210, kept
+    /// there so that old images stay the same; dpm matches pbrt-v3's images).
+    DielectricFromInside(f32),
     Conductor {
         eta: Vec3,
         k: Vec3,
@@ -36,6 +40,7 @@ impl Fresnel {
     fn at(&self, cos: f32) -> Vec3 {
         match *self {
             Fresnel::Dielectric(eta) => Vec3::splat(fresnel::dielectric(cos.abs(), eta)),
+            Fresnel::DielectricFromInside(eta) => Vec3::splat(fresnel::dielectric(-cos.abs(), eta)),
             Fresnel::Conductor { eta, k } => fresnel::conductor(cos.abs(), eta, k),
         }
     }

@@ -104,7 +104,7 @@ impl Bsdf {
                 b.push(Lobe::Lambert(kd));
                 b.push(Lobe::Reflection {
                     scale: ks,
-                    fresnel: Fresnel::Dielectric(COAT_ETA),
+                    fresnel: Fresnel::DielectricFromInside(COAT_ETA),
                     distribution: tr(alpha),
                 });
             }

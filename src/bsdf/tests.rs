@@ -542,3 +542,28 @@ fn the_coated_conductor_reflects_about_what_a_random_walk_through_its_layer_does
     }
     eprintln!("coated conductor: largest albedo error against the walk {worst:.4}");
 }
+
+#[test]
+fn pbrt_v3_plastic_sees_its_coat_from_inside_as_pbrt_v3_does() {
+    // pbrt-v3's plastic builds its Fresnel as FresnelDielectric(1.5, 1): past the critical
+    // angle of 1.5 (half vector more than 41.8° from wo) the coat reflects everything.
+    let alpha = Vec2::splat(0.3);
+    let plastic = Bsdf::new(&Model::Plastic {
+        kd: Vec3::ZERO,
+        ks: Vec3::ONE,
+        alpha,
+    });
+    let d = microfacet::TrowbridgeReitz::new(alpha);
+    for (theta_o, theta_i, fresnel) in [(60.0f32, 60.0f32, 1.0f32), (10.0, 10.0, 0.04)] {
+        let wo = dir(theta_o, 0.0);
+        let wi = dir(theta_i, PI);
+        let m = (wo + wi).normalize();
+        let specular = d.d(m) * d.g(wo, wi) / (4.0 * wo.z * wi.z);
+        let f = plastic.f(wo, wi, Part::All).x;
+        assert!(
+            (f / specular - fresnel).abs() < 0.005,
+            "θ {theta_o}: F {} against {fresnel}",
+            f / specular
+        );
+    }
+}
