@@ -11,6 +11,7 @@ use super::{EncodedDirections, Photon, PhotonAttributes, PhotonMap};
 use crate::optics::{reflect, scatter_dielectric};
 use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
 use crate::scene::Material;
+use crate::world::aim::UnionOfCones;
 use crate::world::lights::{self, Emission, LightEmitter};
 use crate::world::{BoundingSphere, ClosestHit, Surface, World};
 use glam::Vec3;
@@ -573,9 +574,13 @@ fn advance(
             if path.rng.next_f32() >= survive {
                 return false;
             }
-            path.flux *= *albedo / survive;
+            let Some((next, weight)) = diffuse_bounce(world, hit.position, ns, &mut path.rng)
+            else {
+                return false;
+            };
+            path.flux *= *albedo * (weight / survive);
             path.diffuse_seen = true;
-            cosine_hemisphere(ns, path.rng.next_2d())
+            next
         }
         Material::Mirror { tint } => {
             if kind == MapKind::Caustic && path.diffuse_seen {
@@ -616,6 +621,33 @@ fn advance(
     path.origin = hit.position + side * eps;
     path.direction = next;
     path.bounces < MAX_BOUNCES
+}
+
+/// A Lambert bounce off `position` (unit normal `ns` on the side the photon came from): the
+/// direction and its weight cos θ/(π·pdf). Drawn by the cosine, or with probability
+/// [`World::diffuse_bounce_aim`] towards the caustic targets (uniformly over their cones),
+/// the density the mixture of both; `None` when the aimed direction leaves below the surface.
+#[inline(always)]
+fn diffuse_bounce(world: &World, position: Vec3, ns: Vec3, rng: &mut Rng) -> Option<(Vec3, f32)> {
+    let aim = world.diffuse_bounce_aim;
+    let cones = (aim > 0.0)
+        .then(|| UnionOfCones::towards(&world.caustic_targets, position))
+        .flatten()
+        .filter(|cones| !cones.behind(ns));
+    let Some(cones) = cones else {
+        return Some((cosine_hemisphere(ns, rng.next_2d()), 1.0));
+    };
+    let next = if rng.next_f32() < aim {
+        cones.sample(rng).0
+    } else {
+        cosine_hemisphere(ns, rng.next_2d())
+    };
+    let cos = next.dot(ns);
+    if cos <= 0.0 {
+        return None;
+    }
+    let pdf = aim * cones.density(next) + (1.0 - aim) * cos * std::f32::consts::FRAC_1_PI;
+    Some((next, cos * std::f32::consts::FRAC_1_PI / pdf))
 }
 
 /// Leaves the path's photon at a diffuse landing (`position`, arriving along `d` on the side

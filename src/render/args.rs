@@ -130,7 +130,9 @@ pub struct RenderArgs {
     /// Photons stored in each pass's global map (indirect diffuse light).
     ///
     /// Default: 300000 when the scene has two or more diffuse objects (so diffuse light can
-    /// bounce between them), else 0 (no global map: a lone plane cannot light itself).
+    /// bounce between them); 10000 when it has one and mirrors or glass (its light comes back
+    /// to it through them: a dim share, each photon of which costs many paths); else 0 (no
+    /// global map: a lone plane cannot light itself).
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           help_heading = headings::PHOTONS)]
     pub global_photons: Option<usize>,
@@ -343,6 +345,9 @@ pub const DEFAULT_RADIUS_K: usize = 100;
 pub const DEFAULT_CAUSTIC_PHOTONS: usize = 75_000;
 /// Stored global photons per pass by default (scenes with two or more diffuse objects).
 pub const DEFAULT_GLOBAL_PHOTONS: usize = 300_000;
+/// Stored global photons per pass by default in a scene whose one diffuse object sees itself
+/// through mirrors and glass alone (BENCHMARKS.md, "caustic-glass against pbrt-v3").
+pub const DEFAULT_LONE_GLOBAL_PHOTONS: usize = 10_000;
 /// Shadow rays per area light at each diffuse eye hit by default (docs/guide.md,
 /// "Choosing settings").
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 4;

@@ -5,7 +5,9 @@
 //! [`super::pass_loop`]'s, and nothing here traces photons except the pass-0 maps a late start
 //! needs for its radii.
 
-use super::args::{DEFAULT_GLOBAL_PHOTONS, DEFAULT_RADIUS_K, RenderArgs};
+use super::args::{
+    DEFAULT_GLOBAL_PHOTONS, DEFAULT_LONE_GLOBAL_PHOTONS, DEFAULT_RADIUS_K, RenderArgs,
+};
 use super::camera::RayCamera;
 use super::film::{Film, FilmHeader};
 use super::film_file;
@@ -187,23 +189,16 @@ pub struct Start {
 
 /// The settings every pass of this render uses.
 fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
-    let description = &world.description;
-    let diffuse = |shapes: &[scene::Shape]| {
-        (shapes.iter())
-            .filter(|s| world.reads_photons(s.material()))
-            .count()
-    };
-    // Every placement of a prototype is an object of its own.
-    let diffuse_objects = diffuse(&description.shapes)
-        + (description.instances.iter())
-            .map(|i| diffuse(&description.prototypes[i.prototype as usize].shapes))
-            .sum::<usize>();
+    let diffuse_objects = world.diffuse_objects();
     RenderSettings {
         caustic_photons: args.caustic_photons,
-        global_photons: args.global_photons.unwrap_or(if diffuse_objects >= 2 {
-            DEFAULT_GLOBAL_PHOTONS
-        } else {
-            0
+        // Diffuse light bounces between two diffuse objects, or from one back to itself
+        // through its mirrors and glass; a lone plane cannot light itself.
+        global_photons: args.global_photons.unwrap_or(match diffuse_objects {
+            0 => 0,
+            1 if world.has_specular() => DEFAULT_LONE_GLOBAL_PHOTONS,
+            1 => 0,
+            _ => DEFAULT_GLOBAL_PHOTONS,
         }),
         spp: args.spp,
         max_depth: args.max_depth,

@@ -231,6 +231,16 @@ impl UnionOfCones {
         draw_from_cones(&self.cumulative[..self.len], |j| self.cones[j], frame, rng)
     }
 
+    /// The density over solid angle with which [`UnionOfCones::sample`] draws the unit
+    /// `direction`: the cones holding it over their total solid angle.
+    #[inline(always)]
+    pub fn density(&self, direction: Vec3) -> f32 {
+        let holding = (self.cones[..self.len].iter())
+            .filter(|&&(axis, cos_max)| direction.dot(axis) >= cos_max)
+            .count();
+        holding as f32 / self.solid_angle()
+    }
+
     /// Whether every cone lies wholly behind a surface with unit `normal`, so that a surface
     /// there sends no light into any: n·axis < −(sin_max + δ) with δ = 1e-3, squared to spare a
     /// square root ((sin + δ)² < sin² + 3δ), so no cone that could take light is left out.
@@ -356,8 +366,15 @@ mod tests {
             for _ in 0..n {
                 let (d, weight) = union.sample(&mut rng);
                 assert!(inside(d), "{d} outside every cone");
+                // The density a sample is drawn with is the one `density` reports.
+                assert!((union.density(d) * weight - 1.0).abs() < 1e-5);
                 aimed += (f(d) * weight) as f64;
             }
+            assert_eq!(
+                union.density(-union.cone(0).0),
+                0.0,
+                "a direction no cone holds"
+            );
             let mut plain = 0.0f64;
             for _ in 0..n {
                 let d = uniform_sphere(rng.next_2d());

@@ -191,7 +191,15 @@ pub struct World {
     /// Microfacet reflection at least this rough (Trowbridge–Reitz α) reads photons; smoother
     /// lobes are followed ([`crate::bsdf::Part`]).
     pub glossy_min_alpha: f32,
+    /// The probability with which a global photon's diffuse bounce is aimed at the caustic
+    /// targets instead of drawn by the cosine ([`World::diffuse_bounce_aim`]).
+    pub diffuse_bounce_aim: f32,
 }
+
+/// [`World::diffuse_bounce_aim`] in a scene whose one diffuse object sees itself only through
+/// its mirrors and glass: a cosine-drawn bounce that misses them leaves the scene, one aimed at
+/// them mostly comes back. Not 1: a concave object still lights itself directly.
+const LONE_DIFFUSE_BOUNCE_AIM: f32 = 0.75;
 
 impl World {
     /// The world of `description`, its BSDFs split at [`crate::bsdf::ESTIMATED_MIN_ALPHA`].
@@ -338,7 +346,7 @@ impl World {
             .cloned()
             .collect();
         let texturing = texturing::Texturing::new(&description);
-        Ok(Self {
+        let mut world = Self {
             texturing,
             description,
             accel,
@@ -353,7 +361,26 @@ impl World {
             background,
             sky_maps,
             glossy_min_alpha,
-        })
+            diffuse_bounce_aim: 0.0,
+        };
+        if world.diffuse_objects() == 1 && world.has_specular() {
+            world.diffuse_bounce_aim = LONE_DIFFUSE_BOUNCE_AIM;
+        }
+        Ok(world)
+    }
+
+    /// The objects that keep photons, every placement of a prototype counted.
+    pub fn diffuse_objects(&self) -> usize {
+        let d = &self.description;
+        let count = |shapes: &[Shape]| {
+            (shapes.iter())
+                .filter(|s| self.reads_photons(s.material()))
+                .count()
+        };
+        count(&d.shapes)
+            + (d.instances.iter())
+                .map(|i| count(&d.prototypes[i.prototype as usize].shapes))
+                .sum::<usize>()
     }
 
     /// `model`'s lobes at a hit, split as this world reads photons.
