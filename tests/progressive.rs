@@ -360,7 +360,9 @@ struct DensityCli {
 
 /// Progressive diffusion's error against the exact density keeps falling as passes of fresh
 /// photons accumulate and the radii shrink: at least 5% lower for each fourfold of passes
-/// (measured: 0.275, 0.230, 0.209 at 1, 4, 16 passes), and the flat-region noise falls too.
+/// (measured: 0.274, 0.224, 0.192 at 1, 4, 16 passes, the kernels shaped by the four passes
+/// before each), and the flat-region noise falls too: the estimate stays consistent with its
+/// kernels' shapes taken from earlier passes.
 #[test]
 fn progressive_density_converges_on_the_constructed_distribution() {
     use clap::Parser;
@@ -407,12 +409,52 @@ fn progressive_density_converges_on_the_constructed_distribution() {
         sixteen.rmse
     );
     assert!(sixteen.flat_noise <= 0.7 * one.flat_noise);
+    // A kernel whose shape changes from place to place does not keep the map's energy
+    // exactly: within 1% is what the estimate promises (BENCHMARKS.md).
     assert!(
-        sixteen.energy_error.abs() < 0.005,
+        sixteen.energy_error.abs() < 0.01,
         "{}",
         sixteen.energy_error
     );
     assert_eq!(report.metrics.as_ref().unwrap().rmse, sixteen.rmse);
+}
+
+/// Kernels shaped by the four passes before (the default) against kernels shaped by each
+/// pass's own photons, same photons: 7% less error in the edge band after 16 passes (0.373
+/// against 0.399–0.405 on seeds 1, 2 and 3), energy within 1% either way.
+#[test]
+fn a_tensor_history_sharpens_the_edges_of_a_progressive_estimate() {
+    use clap::Parser;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d.pfm");
+    let run = |history: &str| {
+        let argv = [
+            "dpm",
+            "--distribution",
+            "constructed",
+            "--count",
+            "100000",
+            "--width",
+            "128",
+            "--height",
+            "128",
+            "--passes",
+            "16",
+            "--tensor-history",
+            history,
+            "-o",
+            path_str(&out),
+        ];
+        let report = dpm::density::run(&DensityCli::parse_from(argv).args).expect("density");
+        report.metrics.expect("a known density")
+    };
+    let (own, history) = (run("0"), run("4"));
+    eprintln!(
+        "edge band: own {:.4}, history {:.4}; energy {:+.4} {:+.4}",
+        own.edge_band_rmse, history.edge_band_rmse, own.energy_error, history.energy_error
+    );
+    assert!(history.edge_band_rmse < 0.96 * own.edge_band_rmse);
+    assert!(history.energy_error.abs() < 0.01 && own.energy_error.abs() < 0.01);
 }
 
 /// The dimensionless K needs no retuning as the schedule shrinks the radii: on a step edge

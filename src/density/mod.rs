@@ -302,11 +302,16 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     let mut photon_count = 0;
     let mut distribution = None;
     let mut truth = None;
+    // The photons of the passes before, newest last, that shape a pass's kernels.
+    let mut history: std::collections::VecDeque<Vec<crate::photon::Photon>> = Default::default();
     for pass in 0..args.passes {
         // Only the last pass's map is kept (for the kernel field): free the previous one first.
         drop(last_map.take());
         let start = Instant::now();
         let source = load_photons_with_seed(args, schedule.seed(pass))?;
+        if settings.tensor_history > 0 {
+            history.push_back(source.photons.clone());
+        }
         photon_count = source.photons.len();
         source_name = source.name;
         if distribution.is_none() {
@@ -328,7 +333,35 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
             ));
         }
         resolved_first.get_or_insert(resolved);
-        let estimate = resolved.into_boxed();
+        // The passes before this one, when it has any, shape its kernels.
+        let analysis = match resolved {
+            ResolvedEstimator::Diffusion(d) if history.len() > 1 => {
+                let earlier = history.len() - 1;
+                let scale = 1.0 / earlier as f32;
+                let photons: Vec<crate::photon::Photon> = (history.iter().take(earlier))
+                    .flatten()
+                    .map(|p| {
+                        crate::photon::Photon::new(
+                            p.position(),
+                            p.power() * scale,
+                            p.direction(),
+                            p.normal(),
+                        )
+                    })
+                    .collect();
+                let mut analysis = PhotonMap::build(photons, emitted);
+                d.gradient_pass(&mut analysis);
+                Some((d, analysis))
+            }
+            _ => None,
+        };
+        let estimate: Box<dyn crate::estimate::RadianceEstimate + '_> = match &analysis {
+            Some((d, analysis)) => Box::new(crate::estimate::diffusion::shaped::ShapedBy {
+                estimate: *d,
+                analysis,
+            }),
+            None => resolved.into_boxed(),
+        };
         estimate.prepare(&mut map);
         seconds.prepare += start.elapsed().as_secs_f64();
 
@@ -352,6 +385,9 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
             progression.push((done, Metrics::new(&mean, t, &regions(d, &grid, widths))));
         }
         last_map = Some((map, resolved));
+        if history.len() > settings.tensor_history as usize {
+            history.pop_front();
+        }
     }
     let passes = args.passes;
     let resolved = resolved_first.expect("at least one pass");

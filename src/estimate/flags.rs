@@ -3,7 +3,7 @@
 //! into [`EstimatorSettings`]; validation and construction live in [`super::settings`]. Must
 //! not hold anything a film records that the plain settings do not.
 
-use super::diffusion::{DiffusionKernel, DiffusivityUnits};
+use super::diffusion::{Crossings, DiffusionKernel, DiffusivityUnits};
 use super::settings::{EstimatorKind, EstimatorSettings, PAPER_K};
 
 /// The help headings these flags stand under.
@@ -158,6 +158,27 @@ pub struct EstimatorFlags {
     #[arg(long, value_enum, default_value_t = DiffusionKernel::Epanechnikov,
           help_heading = headings::KERNEL, hide_short_help = true)]
     pub kernel: DiffusionKernel,
+
+    /// What the kernel does where filaments cross or fold: shrink, or keep its length.
+    ///
+    /// Where the structure tensor's minor eigenvalue is large too (no single edge direction),
+    /// `shrink` sets λ1 from it as λ2 is set from the major one, so the kernel shrinks along
+    /// both axes, down to the photons it should hold (--min-kernel-photons); `keep` is the
+    /// paper's λ1 = 1.
+    #[arg(long, value_enum, default_value_t = Crossings::Shrink,
+          help_heading = headings::KERNEL, hide_short_help = true)]
+    pub crossings: Crossings,
+
+    /// Earlier passes whose photons shape a progressive pass's diffusion kernels (0: its own).
+    ///
+    /// The structure tensor, and so each kernel's direction and squeeze, is taken on the
+    /// photons of the N passes before (traced again where a run starts past pass 0, so a pass
+    /// is the same wherever it runs), at the pass's own radii; the density is still the
+    /// pass's own photons. The shape is then independent of the photons it spreads, and drawn
+    /// from N times as many, so it stays sharp as the radii shrink.
+    #[arg(long, value_name = "N", default_value_t = super::settings::DEFAULT_TENSOR_HISTORY,
+          help_heading = headings::KERNEL, hide_short_help = true)]
+    pub tensor_history: u32,
 }
 
 impl EstimatorFlags {
@@ -190,6 +211,8 @@ impl EstimatorFlags {
             min_kernel_photons: self.min_kernel_photons,
             gradient_sites: self.gradient_sites,
             kernel: self.kernel,
+            crossings: self.crossings,
+            tensor_history: self.tensor_history,
         }
     }
 }

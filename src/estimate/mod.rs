@@ -30,7 +30,7 @@ pub mod settings;
 
 pub use classic::{FixedRadiusEstimate, KnnEstimate};
 pub use diffusion::{
-    DiffusionEstimate, DiffusionKernel, DiffusionParams, DiffusivityUnits, KernelShape,
+    Crossings, DiffusionEstimate, DiffusionKernel, DiffusionParams, DiffusivityUnits, KernelShape,
 };
 pub use flags::EstimatorFlags;
 pub use kernel::RadialKernel;

@@ -30,6 +30,7 @@ pub mod pilots;
 pub mod pipeline;
 pub mod schedule;
 pub mod setup;
+pub mod tensor_history;
 
 pub use camera::{PassSamples, RayCamera};
 pub use film::{Film, PassImage};

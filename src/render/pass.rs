@@ -24,6 +24,7 @@ use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
 use super::pilots::PixelPlan;
 use super::schedule::{Schedule, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
+use crate::estimate::diffusion::shaped::ShapedBy;
 use crate::estimate::kernel::RadialKernel;
 use crate::estimate::precomputed::PrecomputedIrradiance;
 use crate::estimate::settings::k_equivalent_radius;
@@ -244,10 +245,13 @@ impl PassContext<'_> {
 
     /// Runs pass `pass` on its `maps` (consumed: they are freed when it ends). `None` when an
     /// interruption was requested: the pass is incomplete and must be discarded.
+    /// `analysis`: the map of the earlier passes' caustic photons that shapes the diffusion
+    /// kernels ([`super::tensor_history`]), or `None` for the pass's own.
     pub fn run(
         &self,
         pass: u64,
         maps: PassMaps,
+        analysis: Option<PhotonMap>,
         times: &mut PhaseTimes,
     ) -> Result<Option<PassReport>, EstimateError> {
         if crate::interrupt::requested() {
@@ -259,7 +263,10 @@ impl PassContext<'_> {
         } = maps;
         let mut estimator = None;
         let mut diffusion = None;
-        let caustic_estimate: Option<Box<dyn RadianceEstimate>> = match caustic.as_mut() {
+        // The diffusion kernels' shapes come from the earlier passes' photons when there are
+        // any (the tensor history), else from this pass's own.
+        let mut analysis = analysis.filter(|a| !a.is_empty());
+        let resolved = match caustic.as_mut() {
             Some((map, _)) if !map.is_empty() => {
                 let settings = pass_estimator(
                     &self.settings.estimator,
@@ -271,20 +278,35 @@ impl PassContext<'_> {
                 estimator = Some(resolved.to_string());
                 if let ResolvedEstimator::Diffusion(d) = &resolved {
                     let start = Instant::now();
-                    d.gradient_pass(map);
+                    let shaping: &mut PhotonMap = match analysis.as_mut() {
+                        Some(a) => a,
+                        None => map,
+                    };
+                    d.gradient_pass(shaping);
                     diffusion = Some(*d);
                     times.accumulate(
                         "gradient pass",
                         start.elapsed(),
-                        &[("photons", map.len() as u64)],
+                        &[("photons", shaping.len() as u64)],
                     );
                 }
-                let estimate = resolved.into_boxed();
-                estimate.prepare(map);
-                Some(estimate)
+                Some(resolved)
             }
             _ => None,
         };
+        let caustic_estimate: Option<Box<dyn RadianceEstimate + '_>> =
+            match (resolved, analysis.as_ref()) {
+                (Some(ResolvedEstimator::Diffusion(d)), Some(analysis)) => {
+                    Some(Box::new(ShapedBy {
+                        estimate: d,
+                        analysis,
+                    }))
+                }
+                (resolved, _) => resolved.map(ResolvedEstimator::into_boxed),
+            };
+        if let (Some(estimate), Some((map, _))) = (&caustic_estimate, caustic.as_mut()) {
+            estimate.prepare(map);
+        }
         let global_estimate = global_estimate(self.settings, &self.radii, &self.schedule, pass);
         let precomputed = match &global {
             Some((map, _))
@@ -349,7 +371,7 @@ impl PassContext<'_> {
         let probe = match (&caustic, &diffusion) {
             (Some((map, _)), Some(d)) if self.kernel_field => Some(KernelProbe {
                 world: self.world,
-                map,
+                map: analysis.as_ref().unwrap_or(map),
                 estimate: d,
             }),
             _ => None,

@@ -16,6 +16,8 @@ use super::pilots::PixelPlan;
 use super::pipeline::{PassRecord, RenderError, write_outputs};
 use super::schedule::MAX_PASSES;
 use super::setup::{Start, Wiring};
+use super::tensor_history::TensorHistory;
+use crate::estimate::EstimatorKind;
 use crate::image_io::Image;
 use crate::image_metrics::image_relative_mse;
 use crate::timing::{PhaseTimes, progress};
@@ -67,6 +69,11 @@ impl PassLoop<'_> {
         let last = (first + self.pass_limit()).min(MAX_PASSES);
         let bar = self.bar(first, last);
         let mut last_write: Option<Instant> = None;
+        let settings = &self.wiring.settings;
+        let mut history = TensorHistory::new(match settings.estimator.estimator {
+            EstimatorKind::Diffusion => settings.estimator.tensor_history,
+            _ => 0,
+        });
         for pass in first..last {
             if self.budget_spent(&out.records) {
                 break;
@@ -110,7 +117,12 @@ impl PassLoop<'_> {
                 schedule: self.wiring.schedule,
                 kernel_field: self.wiring.kernel_field,
             };
-            let Some(report) = context.run(pass, maps, times)? else {
+            history.fill_before(pass, self.world, settings, &self.wiring.schedule, times);
+            let analysis = history.analysis_map();
+            if let Some((map, _)) = &maps.caustic {
+                history.record(pass, map);
+            }
+            let Some(report) = context.run(pass, maps, analysis, times)? else {
                 out.interrupted = true;
                 break;
             };

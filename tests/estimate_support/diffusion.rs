@@ -3,8 +3,8 @@
 
 use super::*;
 use dpm::estimate::{
-    DiffusionEstimate, DiffusionKernel, DiffusionParams, DiffusivityUnits, KernelShape, Query,
-    RadianceEstimate, Scratch,
+    Crossings, DiffusionEstimate, DiffusionKernel, DiffusionParams, DiffusivityUnits, KernelShape,
+    Query, RadianceEstimate, Scratch,
 };
 use dpm::photon::{Photon, PhotonMap};
 use glam::Vec3;
@@ -25,6 +25,7 @@ pub fn params(r: f32) -> DiffusionParams {
         noise_floor: 2.0,
         min_kernel_photons: 0.0,
         gradient_sites: 256.0,
+        crossings: Crossings::Keep,
     }
 }
 

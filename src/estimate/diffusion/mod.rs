@@ -24,6 +24,7 @@
 pub mod field_colour;
 pub mod gradient;
 mod scan;
+pub mod shaped;
 pub mod sites;
 pub mod structure;
 pub mod tensor;
@@ -75,6 +76,20 @@ impl DiffusionKernel {
     }
 }
 
+/// What the kernel does where the structure tensor sees more than one direction (crossing
+/// or folded filaments: both eigenvalues large).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Crossings {
+    /// λ1 follows the minor eigenvalue as λ2 the major one: at a crossing the kernel shrinks
+    /// along both axes (down to the fewest photons it should hold) instead of staying long.
+    Shrink,
+    /// The paper's λ1 = 1: the kernel keeps its length along X1 whatever the minor eigenvalue.
+    Keep,
+}
+
 /// Everything the diffusion estimate needs; see `EstimatorSettings` for the defaults.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiffusionParams {
@@ -107,6 +122,8 @@ pub struct DiffusionParams {
     /// Gradient sites a smoothing disc keeps at least where the gradient pass thins them
     /// ([`sites`]); 0 gives every photon a gradient.
     pub gradient_sites: f64,
+    /// What the kernel does at crossings.
+    pub crossings: Crossings,
 }
 
 impl DiffusionParams {
@@ -156,6 +173,9 @@ impl DiffusionParams {
 /// The kernel's shape at a query, for debug images of the kernel field (the paper's Fig. 2b).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KernelShape {
+    /// `λ1` after the floors: 1 keeps the kernel long along the edge, small shrinks it there
+    /// too (a crossing, with [`Crossings::Shrink`]).
+    pub lambda1: f32,
     /// `λ2` after the floor: 1 is round, small is squeezed across the edge.
     pub lambda2: f32,
     /// Edge direction `X1` (the long axis), a unit tangent vector.
@@ -279,16 +299,31 @@ impl DiffusionEstimate {
             DiffusivityUnits::Dimensionless => relative_contrast(signal, r2, isotropic),
         };
         let inside = sums.inside;
-        let floor = if inside <= 0.0 {
+        // The kernel holds about inside·√(λ1 λ2) photons: at least the fewest it should.
+        let fewest = if inside <= 0.0 {
             1.0
         } else {
             let f = p.min_kernel_photons / inside;
             (f * f).clamp(p.lambda2_floor, 1.0)
         };
-        let lambda2 = diffusivity(contrast, p.diffusivity, p.alpha).max(floor);
+        let lambda2 = diffusivity(contrast, p.diffusivity, p.alpha).max(fewest);
+        let lambda1 = match p.crossings {
+            Crossings::Keep => 1.0,
+            Crossings::Shrink => {
+                let minor = (eigen.minor - p.noise_floor * noise).max(0.0);
+                let contrast = match p.units {
+                    DiffusivityUnits::Absolute => minor,
+                    DiffusivityUnits::Dimensionless => relative_contrast(minor, r2, isotropic),
+                };
+                let along = diffusivity(contrast, p.diffusivity, p.alpha);
+                along.max(p.lambda2_floor).max(fewest / lambda2).min(1.0)
+            }
+        };
         let across = frame.to_world(eigen.major_vector);
-        let tensor = DiffusionTensor::new(across, frame.normal, lambda2, p.lambda3);
+        let tensor =
+            DiffusionTensor::new(across, frame.normal, lambda2, p.lambda3).with_lambda1(lambda1);
         let shape = KernelShape {
+            lambda1: lambda1 as f32,
             lambda2: lambda2 as f32,
             x1: tensor.x1.as_vec3(),
             x2: tensor.x2.as_vec3(),

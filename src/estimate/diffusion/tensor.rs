@@ -127,6 +127,11 @@ impl DiffusionTensor {
         }
     }
 
+    /// The same tensor with `λ1` (along the edge) set to `lambda1` (the paper keeps it 1).
+    pub fn with_lambda1(self, lambda1: f64) -> Self {
+        Self { lambda1, ..self }
+    }
+
     /// `dᵀ D⁻¹ d / r²`: the kernel argument of Eq. 14.
     #[inline]
     pub fn scaled_mahalanobis(&self, d: DVec3, radius2: f64) -> f64 {

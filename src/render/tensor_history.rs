@@ -1,0 +1,102 @@
+//! The tensor history of a progressive render: the caustic photons of the passes before the
+//! one running, up to `--tensor-history` of them, from which that pass's diffusion kernels take
+//! their shapes (`estimate::diffusion::splat::ShapedBy`). A pass's photons depend only on the
+//! seed and its index, so a run that starts past pass 0 (a resumed film, a range rendered
+//! apart) traces the passes before it again and renders the same pass as one run would. Owns
+//! which passes are kept and the map they make; must not shade.
+
+use super::pass::{RenderSettings, wanted_maps};
+use super::schedule::Schedule;
+use crate::photon::tracer::{MapKind, trace_map};
+use crate::photon::{Photon, PhotonMap};
+use crate::timing::{PhaseTimes, progress};
+use crate::world::World;
+use std::collections::VecDeque;
+use std::time::Instant;
+
+/// The caustic photons of the latest passes, oldest first.
+pub struct TensorHistory {
+    depth: u64,
+    passes: VecDeque<(u64, Vec<Photon>)>,
+}
+
+impl TensorHistory {
+    /// A history of `depth` passes (0: none is kept; each pass shapes its own kernels).
+    pub fn new(depth: u32) -> Self {
+        Self {
+            depth: u64::from(depth),
+            passes: VecDeque::new(),
+        }
+    }
+
+    /// Makes sure the passes before `pass` that the history keeps are there, tracing the
+    /// caustic maps of those it lacks (a run that starts past pass 0).
+    pub fn fill_before(
+        &mut self,
+        pass: u64,
+        world: &World,
+        settings: &RenderSettings,
+        schedule: &Schedule,
+        times: &mut PhaseTimes,
+    ) {
+        let from = pass.saturating_sub(self.depth);
+        self.passes.retain(|(p, _)| (from..pass).contains(p));
+        let Some(info) =
+            (wanted_maps(settings, world).into_iter()).find(|info| info.kind == MapKind::Caustic)
+        else {
+            return;
+        };
+        for earlier in from..pass {
+            if self.passes.iter().any(|(p, _)| *p == earlier) {
+                continue;
+            }
+            let bar = progress(info.target, "caustic photons of an earlier pass");
+            let start = Instant::now();
+            let (map, counts) = trace_map(
+                world,
+                info.kind,
+                info.target as usize,
+                schedule.seed(earlier),
+                &bar,
+            );
+            bar.finish_and_clear();
+            times.accumulate(
+                "trace tensor history",
+                start.elapsed(),
+                &[("emitted", counts.emitted), ("stored", counts.stored)],
+            );
+            if crate::interrupt::requested() {
+                return;
+            }
+            let at = self.passes.partition_point(|(p, _)| *p < earlier);
+            self.passes.insert(at, (earlier, map.photons().collect()));
+        }
+    }
+
+    /// Keeps pass `pass`'s caustic photons for the passes after it.
+    pub fn record(&mut self, pass: u64, map: &PhotonMap) {
+        if self.depth == 0 {
+            return;
+        }
+        self.passes.push_back((pass, map.photons().collect()));
+        while self.passes.len() as u64 > self.depth {
+            self.passes.pop_front();
+        }
+    }
+
+    /// The map the kernels of the next pass take their shapes from: the kept passes'
+    /// photons, each pass's power divided by their number so that the map's density is one
+    /// pass's. `None` while nothing is kept.
+    pub fn analysis_map(&self) -> Option<PhotonMap> {
+        if self.passes.is_empty() {
+            return None;
+        }
+        let scale = 1.0 / self.passes.len() as f32;
+        let photons: Vec<Photon> = (self.passes.iter())
+            .flat_map(|(_, photons)| photons.iter())
+            .map(|p| Photon::new(p.position(), p.power() * scale, p.direction(), p.normal()))
+            .collect();
+        let emitted = photons.len() as u64;
+        Some(PhotonMap::build(photons, emitted))
+    }
+}
