@@ -278,6 +278,8 @@ pub enum TexturedParameter {
     TransmitTint,
     /// A glass's index of refraction (a float texture).
     Ior,
+    /// A parameter of a BSDF material's model ([`crate::bsdf::Model::set`] keeps it in range).
+    Model(crate::bsdf::ModelParameter),
 }
 
 /// A material (by its index in [`super::SceneDescription::materials`], which holds its
@@ -291,7 +293,8 @@ pub struct TexturedMaterial {
 impl TexturedMaterial {
     /// `base` (the material's untextured values) with its textured parameters evaluated at
     /// `uv`. Colours are clamped to [0, 1] and an index of refraction to at least 1, the
-    /// range dpm's materials keep (pbrt clamps reflectances at 0 only).
+    /// range dpm's materials keep (pbrt clamps reflectances at 0 only); a model's parameters
+    /// as [`crate::bsdf::Model::set`] keeps them.
     pub fn evaluate(&self, base: &super::Material, uv: Vec2) -> super::Material {
         use super::Material;
         let mut material = *base;
@@ -309,10 +312,9 @@ impl TexturedMaterial {
                 }
                 (Material::Glass { ior, .. }, TexturedParameter::Ior) => *ior = v.x.max(1.0),
                 (Material::Bsdf(model), TexturedParameter::Albedo) => {
-                    if let Some(kd) = model.diffuse_mut() {
-                        *kd = colour;
-                    }
+                    model.set(crate::bsdf::ModelParameter::Diffuse, v)
                 }
+                (Material::Bsdf(model), TexturedParameter::Model(p)) => model.set(*p, v),
                 // A parameter the material does not have: the readers never pair them.
                 _ => {}
             }
