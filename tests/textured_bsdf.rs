@@ -1,7 +1,8 @@
 //! Textures on a BSDF material's parameters beyond its diffuse colour: each pbrt name becomes
 //! the model parameter it is (roughness with its material's remap and axes), a plastic whose
 //! `Ks` is a checkerboard shows, square by square, what a plastic of that square's constant
-//! `Ks` shows, and a textured roughness renders the image of the constant it evaluates to.
+//! `Ks` shows, a textured roughness renders the image of the constant it evaluates to, and the
+//! TOML format's colour fields take the texture tables `kd` takes.
 
 mod support;
 
@@ -260,4 +261,59 @@ fn a_textured_roughness_renders_the_image_of_the_constant_it_evaluates_to() {
         off > 0.1 * noise,
         "the roughness shows: {off:.3e} against {noise:.3e}"
     );
+}
+
+#[test]
+fn toml_bsdf_colour_fields_take_texture_tables() {
+    let text = |ks: &str| {
+        format!(
+            "[camera]\nposition = [0.0, 3.0, 0.0]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\n\
+             fov_y = 60.0\nresolution = [8, 8]\n\n\
+             [[lights]]\ntype = \"distant\"\ndirection = [-1.0, -1.0, 0.0]\nirradiance = [1.0, 1.0, 1.0]\n\n\
+             [materials.shiny]\ntype = \"plastic\"\nkd = [0.3, 0.3, 0.3]\nks = {ks}\nroughness = 0.3\n\n\
+             [[objects]]\ntype = \"quad\"\ncorner = [-1.0, 0.0, 1.0]\nedge_u = [2.0, 0.0, 0.0]\n\
+             edge_v = [0.0, 0.0, -2.0]\nmaterial = \"shiny\"\n"
+        )
+    };
+    let board =
+        text("{ checkerboard = [[0.8, 0.8, 0.8], [0.1, 0.1, 0.1]], uv_scale = [2.0, 2.0] }");
+    let scene = support::description(&board);
+    let [t] = &scene.textured_materials[..] else {
+        panic!("{:?}", scene.textured_materials)
+    };
+    assert_eq!(t.textures[0].0, model_parameter(P::Specular));
+    // The untextured copy holds the squares' mean.
+    let Material::Bsdf(Model::Plastic { ks, .. }) = scene.materials[0] else {
+        panic!("{:?}", scene.materials[0])
+    };
+    assert!((ks - Vec3::splat(0.45)).abs().max_element() < 1e-6, "{ks}");
+    let textured = World::new(scene).unwrap();
+    let bright = support::world(&text("[0.8, 0.8, 0.8]"));
+    let got = seen_at(&textured, -0.5, 0.5);
+    let want = seen_at(&bright, -0.5, 0.5);
+    assert!(
+        (got - want).abs().max_element() <= 1e-6 * want.max_element(),
+        "{got} against {want}"
+    );
+    // Every colour field takes one; a bad table names its field.
+    for (kind, field) in [
+        ("uber", "kr"),
+        ("uber", "opacity"),
+        ("translucent", "transmit"),
+        ("rough_glass", "transmit_tint"),
+        ("diffuse_transmission", "transmittance"),
+    ] {
+        let text = text("[0.5, 0.5, 0.5]").replace(
+            "type = \"plastic\"\nkd = [0.3, 0.3, 0.3]\nks = [0.5, 0.5, 0.5]\nroughness = 0.3",
+            &format!("type = \"{kind}\"\n{field} = {{ checkerboard = [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]] }}"),
+        );
+        let scene = support::description(&text);
+        assert_eq!(scene.textured_materials.len(), 1, "{kind}.{field}");
+        let bad = text.replace("checkerboard", "chequerboard");
+        let e = dpm::scene::parse(&bad, std::path::Path::new("bad.toml")).unwrap_err();
+        assert!(
+            e.field.contains(field) && e.line.is_some(),
+            "{kind}.{field}: {e}"
+        );
+    }
 }

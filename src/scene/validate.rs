@@ -346,13 +346,14 @@ pub(crate) fn material(
             )?,
         },
         MaterialSpec::Bsdf(kind, spec) => {
-            let mut diffuse = |field: &str, given: Option<&ColourSpec>, default: f32| match given {
-                None => Ok(Vec3::splat(default)),
-                Some(_) => colour(field, given, TexturedParameter::Albedo),
-            };
+            let mut read =
+                |field: &str, given: Option<&ColourSpec>, default: f32, parameter| match given {
+                    None => Ok(Vec3::splat(default)),
+                    Some(_) => colour(field, given, TexturedParameter::Model(parameter)),
+                };
             let refuse =
                 |field: &str, message: String| doc.error(&child_path(path, field), message);
-            Material::Bsdf(super::toml_bsdf::model(kind, spec, &mut diffuse, &refuse)?)
+            Material::Bsdf(super::toml_bsdf::model(kind, spec, &mut read, &refuse)?)
         }
     };
     check_material(&material).map_err(at(doc, path))?;
