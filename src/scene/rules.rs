@@ -127,7 +127,89 @@ pub fn check_material(material: &Material) -> Result<(), InvalidField> {
             unit_rgb("transmit_tint", *transmit_tint).map(drop)
         }
         Material::Bsdf(model) => check_model(model),
+        Material::Mix { amount, .. } => {
+            if (0.0..=1.0).contains(amount) {
+                Ok(())
+            } else {
+                Err(InvalidField::new(
+                    "amount",
+                    format!("{amount} is not in [0, 1]"),
+                ))
+            }
+        }
     }
+}
+
+/// Checks a scene's material table: each material as [`check_material`] does, and every mix's
+/// materials (field `materials[i].materials`) in the table and nested at most
+/// [`super::MAX_MIX_DEPTH`] deep, which also rules out a mix that reaches itself.
+pub fn check_materials(materials: &[Material]) -> Result<(), InvalidField> {
+    let within = |i: usize, e: InvalidField| e.within(&format!("materials[{i}]"));
+    for (i, material) in materials.iter().enumerate() {
+        check_material(material).map_err(|e| within(i, e))?;
+    }
+    match mix_problem(materials) {
+        None => Ok(()),
+        Some((i, e)) => Err(within(i, e)),
+    }
+}
+
+/// The first mix (by index) whose materials are missing, reach it again or nest too deep, and
+/// why.
+pub(crate) fn mix_problem(materials: &[Material]) -> Option<(usize, InvalidField)> {
+    let mut heights = vec![None; materials.len()];
+    (0..materials.len())
+        .find_map(|i| (mix_height(materials, i, 0, &mut heights).err()).map(|e| (i, e)))
+}
+
+/// How many mixes nest in material `id`, itself included (0: not a mix), with `depth` mixes
+/// above it; each material's is worked out once, in `heights`.
+fn mix_height(
+    materials: &[Material],
+    id: usize,
+    depth: usize,
+    heights: &mut [Option<usize>],
+) -> Result<usize, InvalidField> {
+    let too_deep = || {
+        InvalidField::new(
+            "materials",
+            format!(
+                "mixes nest more than {} deep, or a mix reaches itself",
+                super::MAX_MIX_DEPTH
+            ),
+        )
+    };
+    if let Some(height) = heights[id] {
+        return Ok(height);
+    }
+    let Material::Mix {
+        materials: pair, ..
+    } = materials[id]
+    else {
+        heights[id] = Some(0);
+        return Ok(0);
+    };
+    if depth >= super::MAX_MIX_DEPTH {
+        return Err(too_deep());
+    }
+    let mut height = 0;
+    for part in pair {
+        if part as usize >= materials.len() {
+            return Err(InvalidField::new(
+                "materials",
+                format!(
+                    "material {part} does not exist (there are {})",
+                    materials.len()
+                ),
+            ));
+        }
+        height = height.max(1 + mix_height(materials, part as usize, depth + 1, heights)?);
+    }
+    if height > super::MAX_MIX_DEPTH {
+        return Err(too_deep());
+    }
+    heights[id] = Some(height);
+    Ok(height)
 }
 
 /// A BSDF model's colours in [0, 1] (pbrt's uber and plastic may sum above 1, as in pbrt),

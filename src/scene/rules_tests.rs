@@ -68,3 +68,39 @@ fn tints_above_one_are_refused() {
     assert_eq!(check_material(&Material::clear_glass(1.5)), Ok(()));
     assert_eq!(check_material(&Material::MIRROR), Ok(()));
 }
+
+#[test]
+fn a_material_table_refuses_mixes_that_reach_themselves_nest_too_deep_or_name_nothing() {
+    let white = Material::Diffuse { albedo: Vec3::ONE };
+    let mix = |a: u32, b: u32| Material::Mix {
+        materials: [a, b],
+        amount: 0.5,
+    };
+    assert_eq!(check_materials(&[white, mix(0, 0)]), Ok(()));
+    // Material i mixes i − 1 and 0: a chain as deep as the table allows.
+    let chain = |depth: usize| {
+        let mut table = vec![white];
+        table.extend((1..=depth as u32).map(|i| mix(i - 1, 0)));
+        table
+    };
+    assert_eq!(check_materials(&chain(crate::scene::MAX_MIX_DEPTH)), Ok(()));
+    let e = check_materials(&chain(crate::scene::MAX_MIX_DEPTH + 1)).unwrap_err();
+    assert!(e.message.contains("nest"), "{e}");
+    let e = check_materials(&[white, mix(0, 2), mix(1, 0)]).unwrap_err();
+    assert_eq!(e.field, "materials[1].materials");
+    assert!(e.message.contains("reaches itself"), "{e}");
+    let e = check_materials(&[white, mix(0, 7)]).unwrap_err();
+    assert!(
+        e.field == "materials[1].materials" && e.message.contains("7"),
+        "{e}"
+    );
+    let e = check_materials(&[
+        white,
+        Material::Mix {
+            materials: [0, 0],
+            amount: f32::NAN,
+        },
+    ])
+    .unwrap_err();
+    assert_eq!(e.field, "materials[1].amount");
+}

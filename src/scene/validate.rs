@@ -475,7 +475,11 @@ pub(crate) fn mesh_placement(
 /// triangle mesh (one material's part of an OBJ, or a quad... which is never closed) in which
 /// every edge is shared by exactly two triangles; inside is decided by ray parity.
 pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<String> {
-    let opaque = |m: u32| !matches!(scene.materials[m as usize], Material::Glass { .. });
+    let materials = &scene.materials;
+    let opaque = |m: u32| {
+        let glass = |m: &Material| matches!(m, Material::Glass { .. });
+        !materials[m as usize].any_shown(materials, &glass)
+    };
     let mut warnings = Vec::new();
     for (s, shape) in scene.shapes.iter().enumerate() {
         let inside: Box<dyn Fn(Vec3) -> bool> = match shape {

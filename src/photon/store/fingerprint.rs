@@ -185,6 +185,12 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
                 h.vec3(*reflect_tint);
                 h.vec3(*transmit_tint);
             }
+            Material::Mix { materials, amount } => {
+                h.u32(4);
+                h.u32(materials[0]);
+                h.u32(materials[1]);
+                h.f32(*amount);
+            }
             Material::Bsdf(model) => {
                 h.u32(3);
                 // Every parameter, exactly: `Debug` prints each f32 so that it reads back.
@@ -298,6 +304,7 @@ impl Fnv64 {
                     .bytes()
                     .for_each(|b| self.u32(u32::from(b)));
             }
+            TexturedParameter::MixAmount => self.u32(6),
         }
     }
 
