@@ -227,7 +227,7 @@ impl Mapper<'_> {
                     format!("material \"{kind}\" scatters light in a participating medium under the surface, and dpm has no media; use glass or a diffuse material"),
                 ));
             }
-            "mix" | "disney" => {
+            "disney" => {
                 return Err(at.error(
                     "Material",
                     format!("material \"{kind}\" has no part dpm can render (dpm has diffuse, mirror and glass)"),
