@@ -1,4 +1,4 @@
-//! pbrt's `mix` material in both dialects: each point of a mixed surface
+//! pbrt's `mix` material in both dialects and the TOML format's: each point of a mixed surface
 //! shows one of the two materials, the second with probability `amount` (pbrt-v3 weighs its
 //! `namedmaterial1` by `amount`, pbrt-v4 chooses `materials[1]` with that probability); a mix
 //! of a white and a black diffuse material renders the image of the diffuse twin of their
@@ -11,7 +11,7 @@ use dpm::image_io::Image;
 use dpm::image_metrics::{channel_mean, relative_mse};
 use dpm::scene::{self, LoadOptions, Material, TexturedParameter};
 use dpm::world::{Surface, World};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::Path;
 use support::pbrt::{load_text, loads, render};
 
@@ -333,6 +333,49 @@ fn bad_mixes_are_refused_naming_their_place() {
             "{material}: {e}"
         );
     }
+}
+
+/// A TOML floor under a distant light, its material `m` a mix of `white` and `black` with
+/// `fields`.
+fn toml_floor(fields: &str) -> String {
+    format!(
+        "[camera]\nposition = [0.0, 4.0, 0.01]\nlook_at = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\n\
+         fov_y = 45.0\nresolution = [8, 8]\n\n\
+         [[lights]]\ntype = \"distant\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = [1.0, 1.0, 1.0]\n\n\
+         [materials.white]\ntype = \"diffuse\"\nalbedo = [1.0, 1.0, 1.0]\n\n\
+         [materials.black]\ntype = \"diffuse\"\nalbedo = [0.0, 0.0, 0.0]\n\n\
+         [materials.m]\ntype = \"mix\"\n{fields}\n\n\
+         [[objects]]\ntype = \"quad\"\ncorner = [-2.0, 0.0, 2.0]\nedge_u = [4.0, 0.0, 0.0]\n\
+         edge_v = [0.0, 0.0, -4.0]\nmaterial = \"m\"\n"
+    )
+}
+
+#[test]
+fn a_toml_mix_shows_its_second_material_with_probability_amount() {
+    let world = support::world(&toml_floor(
+        "materials = [\"black\", \"white\"]\namount = 0.3",
+    ));
+    let share = white_share(&world, 400, None);
+    eprintln!("TOML mix of amount 0.3: white share {share:.4}");
+    assert!((share - 0.3).abs() < 0.006, "{share}");
+    // The default amount is ½; a texture table's channels' mean is read at each point.
+    let even_odd = support::description(&toml_floor(
+        "materials = [\"white\", \"black\"]\namount = { checkerboard = [[0.1, 0.1, 0.1], [0.8, 0.8, 0.8]] }",
+    ));
+    let t = &even_odd.textured_materials[0];
+    assert_eq!(t.textures[0].0, TexturedParameter::MixAmount);
+    let mix = even_odd.materials[t.material as usize];
+    let evaluated = t.evaluate(&mix, Vec2::new(0.25, 0.25));
+    assert!(
+        matches!(evaluated, Material::Mix { amount, .. } if amount == 0.1),
+        "{evaluated:?}"
+    );
+    let plain = support::description(&toml_floor("materials = [\"white\", \"black\"]"));
+    let m = plain.materials[plain.shapes[0].material() as usize];
+    assert!(
+        matches!(m, Material::Mix { amount, .. } if amount == 0.5),
+        "{m:?}"
+    );
 }
 
 #[test]

@@ -26,6 +26,7 @@ mod rules;
 pub(crate) mod tessellate;
 pub mod texture;
 mod toml_bsdf;
+mod toml_mix;
 mod toml_texture;
 pub(crate) mod transform;
 mod validate;
@@ -608,10 +609,15 @@ pub fn parse_with(
         folder: &scene_folder,
         files,
     };
+    // Each entry's index, its place in name order, for mixes to name the others by.
+    let names: std::collections::HashMap<&str, u32> = (spec.materials.iter().enumerate())
+        .map(|(i, (name, _))| (name.as_str(), i as u32))
+        .collect();
     for (name, material) in &spec.materials {
         let path = document::child_path("materials", name);
-        let (material, textures) = validate::material(&doc, &path, material, &images)?;
+        let (material, textures) = validate::material(&doc, &path, material, &images, &names)?;
         let index = materials.add_named(name, material);
+        debug_assert_eq!(Some(&index), names.get(name.as_str()));
         if !textures.is_empty() {
             textured_materials.push(TexturedMaterial {
                 material: index,
@@ -619,6 +625,8 @@ pub fn parse_with(
             });
         }
     }
+
+    toml_mix::check_nesting(&doc, &spec.materials, materials.materials())?;
 
     let mut shapes = Vec::new();
     for (i, object) in spec.objects.iter().enumerate() {

@@ -65,6 +65,10 @@ impl MaterialTable {
         })
     }
 
+    pub(crate) fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
     pub(crate) fn into_materials(self) -> Vec<Material> {
         self.materials
     }
@@ -307,11 +311,13 @@ fn spot_falloff(doc: &Document, path: &str, name: &str) -> Result<SpotFalloff, S
         })
 }
 
+/// The material at `path`; `names` gives each `[materials]` entry's index, for a mix.
 pub(crate) fn material(
     doc: &Document,
     path: &str,
     spec: &MaterialSpec,
     images: &ImageSource,
+    names: &HashMap<&str, u32>,
 ) -> Result<(Material, Vec<(TexturedParameter, Texture)>), SceneError> {
     let mut textures = Vec::new();
     let mut colour = |field: &str,
@@ -355,6 +361,8 @@ pub(crate) fn material(
                 |field: &str, message: String| doc.error(&child_path(path, field), message);
             Material::Bsdf(super::toml_bsdf::model(kind, spec, &mut read, &refuse)?)
         }
+        // Checked on its own: it has no colours.
+        MaterialSpec::Mix(mix) => return super::toml_mix::mix(doc, path, mix, names, images),
     };
     check_material(&material).map_err(at(doc, path))?;
     Ok((material, textures))
