@@ -575,6 +575,11 @@ const MALFORMED: &[(&str, Option<&str>, usize, &str, &str)] = &[
     ("glass_reflect_tint_negative",   None,                                 21, "materials.glass.reflect_tint[2]", "not in [0, 1]"),
     ("glass_transmit_tint_above_one", None,                                 21, "materials.glass.transmit_tint[1]","not in [0, 1]"),
     ("ks_above_one",                  Some("meshes/bright-mirror.mtl"),     7,  "objects[1].file",                 "Ks channel 1.2"),
+    ("mix_unknown_material",          None,                                 20, "materials.speckled.materials[1]", "unknown material `whit`"),
+    ("mix_three_materials",           None,                                 20, "materials.speckled.materials",    "two material names, not 3"),
+    ("mix_amount_nan",                None,                                 21, "materials.speckled.amount",       "NaN is not in [0, 1]"),
+    ("mix_amount_above_one",          None,                                 21, "materials.speckled.amount",       "1.25 is not in [0, 1]"),
+    ("mix_reaches_itself",            None,                                 20, "materials.flecked.materials",     "a mix reaches itself"),
 ];
 
 #[test]

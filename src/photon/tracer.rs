@@ -564,6 +564,9 @@ fn advance(
     let material = &world.material_at(m, &hit);
     let entering = hit.entering(d);
     let (ng, ns) = hit.facing(d);
+    if world.keeps_photon_on_mix(m, material) {
+        store_photon(kind, path, hit.position, d, ns, stored);
+    }
     let next = match material {
         Material::Diffuse { albedo } => {
             store_photon(kind, path, hit.position, d, ns, stored);
@@ -610,6 +613,8 @@ fn advance(
                 None => return false,
             }
         }
+        // `World::material_at` never gives a mix.
+        Material::Mix { .. } => return false,
     };
     if specular_tinted_out(material, path.flux) {
         // A tint took everything: nothing left to store.

@@ -355,7 +355,8 @@ pub(super) fn sampled_specular(
     rng: &mut crate::sampling::Rng,
 ) -> Option<(Vec3, Vec3)> {
     match material {
-        Material::Diffuse { .. } => None,
+        // `World::material_at` never gives a mix.
+        Material::Diffuse { .. } | Material::Mix { .. } => None,
         // Its delta lobes only: what a non-delta lobe sees is the camera path's own business.
         Material::Bsdf(model) => {
             let frame = Frame::new(hit.shading_normal);

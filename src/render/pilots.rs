@@ -216,10 +216,11 @@ impl<'w> Survey<'w> {
                 let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
                 hit.position + side * world.ray_epsilon()
             };
-            match world.material(m) {
+            match &world.material_at(m, &hit) {
                 // A camera path reads the photon maps at a BSDF's Lambert lobes and follows
-                // its other lobes stochastically: the pilot stops there as at a diffuse one.
-                Material::Diffuse { .. } | Material::Bsdf(_) => {
+                // its other lobes stochastically: the pilot stops there as at a diffuse one
+                // (`material_at` never gives a mix).
+                Material::Diffuse { .. } | Material::Bsdf(_) | Material::Mix { .. } => {
                     last_rays.push((o, d, code));
                     if pilot.normal.is_none() {
                         pilot.normal = Some(ns);

@@ -20,7 +20,7 @@ const LIGHT_TYPES: [&str; 7] = [
     "environment",
     "mesh",
 ];
-const MATERIAL_TYPES: [&str; 13] = [
+const MATERIAL_TYPES: [&str; 14] = [
     "diffuse",
     "mirror",
     "glass",
@@ -34,6 +34,7 @@ const MATERIAL_TYPES: [&str; 13] = [
     "coated_diffuse",
     "coated_conductor",
     "diffuse_transmission",
+    "mix",
 ];
 const OBJECT_TYPES: [&str; 3] = ["sphere", "quad", "mesh"];
 
@@ -193,8 +194,28 @@ pub(crate) enum MaterialSpec {
     Diffuse(DiffuseSpec),
     Mirror(MirrorSpec),
     Glass(GlassSpec),
-    /// Any type past `glass` in `MATERIAL_TYPES`, read by [`super::toml_bsdf`].
+    /// Any type past `glass` in `MATERIAL_TYPES` but `mix`, read by [`super::toml_bsdf`].
     Bsdf(&'static str, Box<super::toml_bsdf::BsdfSpec>),
+    /// Read by [`super::toml_mix`].
+    Mix(MixSpec),
+}
+
+/// One of two named materials at each point: the second with probability `amount`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MixSpec {
+    pub materials: Vec<String>,
+    /// Default 0.5.
+    #[serde(default)]
+    pub amount: Option<AmountSpec>,
+}
+
+/// A mix's amount: a number, or a texture table (the mean of its channels).
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(crate) enum AmountSpec {
+    Number(f32),
+    Texture(TextureSpec),
 }
 
 #[derive(Deserialize)]
@@ -452,6 +473,7 @@ fn read_material(doc: &Document, path: &str, value: &Value) -> Result<MaterialSp
         "diffuse" => MaterialSpec::Diffuse(doc.deserialize(&fields)?),
         "mirror" => MaterialSpec::Mirror(doc.deserialize(&fields)?),
         "glass" => MaterialSpec::Glass(doc.deserialize(&fields)?),
+        "mix" => MaterialSpec::Mix(doc.deserialize(&fields)?),
         bsdf => {
             if let DeValue::Table(table) = fields.get_ref() {
                 let names = table.iter().map(|(k, _)| k.get_ref().to_string());

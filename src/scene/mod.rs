@@ -26,13 +26,14 @@ mod rules;
 pub(crate) mod tessellate;
 pub mod texture;
 mod toml_bsdf;
+mod toml_mix;
 mod toml_texture;
 pub(crate) mod transform;
 mod validate;
 
 pub use curves::{CurveKind, Curves, check_curves};
 pub use environment::{EnvironmentMap, SphereMapping};
-pub use rules::{InvalidField, check_light, check_material, check_mesh};
+pub use rules::{InvalidField, check_light, check_material, check_materials, check_mesh};
 pub use texture::{Cutout, Texture, TexturedMaterial, TexturedParameter};
 
 use glam::{Vec2, Vec3};
@@ -332,30 +333,67 @@ pub enum Material {
     /// sampled and followed. Diffuse, mirror and smooth glass keep their own variants, so a
     /// scene of those alone renders as it always has.
     Bsdf(crate::bsdf::Model),
+    /// At each point of the surface one of two materials (ids into
+    /// [`SceneDescription::materials`], either maybe a mix itself): `materials[1]` with
+    /// probability `amount` (in [0, 1]), else `materials[0]`, as pbrt-v4 chooses. The world
+    /// picks one by a hash of the hit point ([`crate::world::World::material_at`]), so
+    /// nothing that shades or scatters ever sees a mix.
+    Mix { materials: [u32; 2], amount: f32 },
 }
+
+/// How deep mixes of mixes may nest: deeper (or a cycle, which only a description built in
+/// code could hold) is refused by [`check_materials`], and a hit there shows black.
+pub const MAX_MIX_DEPTH: usize = 16;
 
 impl Material {
     /// Whether photons stay on it (it has a lobe read from photons, microfacet reflection
-    /// counting from `glossy_min_alpha`) and a camera path reads the photon maps there.
-    pub fn is_diffuse_receiver(&self, glossy_min_alpha: f32) -> bool {
-        match self {
+    /// counting from `glossy_min_alpha`) and a camera path reads the photon maps there; a
+    /// mix (its materials looked up in `materials`) where either of its materials does.
+    pub fn is_diffuse_receiver(&self, materials: &[Material], glossy_min_alpha: f32) -> bool {
+        self.any_shown(materials, &|m| match m {
             Material::Diffuse { .. } => true,
-            Material::Mirror { .. } | Material::Glass { .. } => false,
             Material::Bsdf(model) => crate::bsdf::Bsdf::split_at(model, glossy_min_alpha)
                 .has(crate::bsdf::Part::Estimated),
-        }
+            _ => false,
+        })
     }
 
     /// Whether light leaving it can focus into a caustic: it has a lobe that is followed
     /// rather than estimated from photons (a mirror, glass, a glossy coat smoother than
-    /// `glossy_min_alpha`).
-    pub fn makes_caustics(&self, glossy_min_alpha: f32) -> bool {
-        match self {
-            Material::Diffuse { .. } => false,
+    /// `glossy_min_alpha`); a mix where either of its materials does.
+    pub fn makes_caustics(&self, materials: &[Material], glossy_min_alpha: f32) -> bool {
+        self.any_shown(materials, &|m| match m {
             Material::Mirror { .. } | Material::Glass { .. } => true,
             Material::Bsdf(model) => crate::bsdf::Bsdf::split_at(model, glossy_min_alpha)
                 .has(crate::bsdf::Part::Followed),
+            _ => false,
+        })
+    }
+
+    /// Whether `test` holds for a material a point of this one may show: itself, or any
+    /// material a mix reaches in `materials` (down to [`MAX_MIX_DEPTH`]). `test` never sees a
+    /// mix.
+    pub fn any_shown(&self, materials: &[Material], test: &dyn Fn(&Material) -> bool) -> bool {
+        fn reach(
+            m: &Material,
+            materials: &[Material],
+            test: &dyn Fn(&Material) -> bool,
+            depth: usize,
+        ) -> bool {
+            match m {
+                Material::Mix {
+                    materials: pair, ..
+                } => {
+                    depth < MAX_MIX_DEPTH
+                        && pair.iter().any(|&id| {
+                            (materials.get(id as usize))
+                                .is_some_and(|m| reach(m, materials, test, depth + 1))
+                        })
+                }
+                leaf => test(leaf),
+            }
         }
+        reach(self, materials, test, 0)
     }
 
     /// A mirror that reflects everything.
@@ -571,10 +609,15 @@ pub fn parse_with(
         folder: &scene_folder,
         files,
     };
+    // Each entry's index, its place in name order, for mixes to name the others by.
+    let names: std::collections::HashMap<&str, u32> = (spec.materials.iter().enumerate())
+        .map(|(i, (name, _))| (name.as_str(), i as u32))
+        .collect();
     for (name, material) in &spec.materials {
         let path = document::child_path("materials", name);
-        let (material, textures) = validate::material(&doc, &path, material, &images)?;
+        let (material, textures) = validate::material(&doc, &path, material, &images, &names)?;
         let index = materials.add_named(name, material);
+        debug_assert_eq!(Some(&index), names.get(name.as_str()));
         if !textures.is_empty() {
             textured_materials.push(TexturedMaterial {
                 material: index,
@@ -582,6 +625,8 @@ pub fn parse_with(
             });
         }
     }
+
+    toml_mix::check_nesting(&doc, &spec.materials, materials.materials())?;
 
     let mut shapes = Vec::new();
     for (i, object) in spec.objects.iter().enumerate() {

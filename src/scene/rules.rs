@@ -127,7 +127,89 @@ pub fn check_material(material: &Material) -> Result<(), InvalidField> {
             unit_rgb("transmit_tint", *transmit_tint).map(drop)
         }
         Material::Bsdf(model) => check_model(model),
+        Material::Mix { amount, .. } => {
+            if (0.0..=1.0).contains(amount) {
+                Ok(())
+            } else {
+                Err(InvalidField::new(
+                    "amount",
+                    format!("{amount} is not in [0, 1]"),
+                ))
+            }
+        }
     }
+}
+
+/// Checks a scene's material table: each material as [`check_material`] does, and every mix's
+/// materials (field `materials[i].materials`) in the table and nested at most
+/// [`super::MAX_MIX_DEPTH`] deep, which also rules out a mix that reaches itself.
+pub fn check_materials(materials: &[Material]) -> Result<(), InvalidField> {
+    let within = |i: usize, e: InvalidField| e.within(&format!("materials[{i}]"));
+    for (i, material) in materials.iter().enumerate() {
+        check_material(material).map_err(|e| within(i, e))?;
+    }
+    match mix_problem(materials) {
+        None => Ok(()),
+        Some((i, e)) => Err(within(i, e)),
+    }
+}
+
+/// The first mix (by index) whose materials are missing, reach it again or nest too deep, and
+/// why.
+pub(crate) fn mix_problem(materials: &[Material]) -> Option<(usize, InvalidField)> {
+    let mut heights = vec![None; materials.len()];
+    (0..materials.len())
+        .find_map(|i| (mix_height(materials, i, 0, &mut heights).err()).map(|e| (i, e)))
+}
+
+/// How many mixes nest in material `id`, itself included (0: not a mix), with `depth` mixes
+/// above it; each material's is worked out once, in `heights`.
+fn mix_height(
+    materials: &[Material],
+    id: usize,
+    depth: usize,
+    heights: &mut [Option<usize>],
+) -> Result<usize, InvalidField> {
+    let too_deep = || {
+        InvalidField::new(
+            "materials",
+            format!(
+                "mixes nest more than {} deep, or a mix reaches itself",
+                super::MAX_MIX_DEPTH
+            ),
+        )
+    };
+    if let Some(height) = heights[id] {
+        return Ok(height);
+    }
+    let Material::Mix {
+        materials: pair, ..
+    } = materials[id]
+    else {
+        heights[id] = Some(0);
+        return Ok(0);
+    };
+    if depth >= super::MAX_MIX_DEPTH {
+        return Err(too_deep());
+    }
+    let mut height = 0;
+    for part in pair {
+        if part as usize >= materials.len() {
+            return Err(InvalidField::new(
+                "materials",
+                format!(
+                    "material {part} does not exist (there are {})",
+                    materials.len()
+                ),
+            ));
+        }
+        height = height.max(1 + mix_height(materials, part as usize, depth + 1, heights)?);
+    }
+    if height > super::MAX_MIX_DEPTH {
+        return Err(too_deep());
+    }
+    heights[id] = Some(height);
+    Ok(height)
 }
 
 /// A BSDF model's colours in [0, 1] (pbrt's uber and plastic may sum above 1, as in pbrt),
@@ -549,75 +631,5 @@ pub(crate) fn has_zero_area(positions: &[Vec3], [a, b, c]: [u32; 3]) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scene::SpotFalloff;
-
-    fn spot(cone: f32, start: f32) -> Light {
-        Light::Spot {
-            position: Vec3::ZERO,
-            direction: -Vec3::Y,
-            cone_angle_degrees: cone,
-            falloff_start_degrees: start,
-            falloff: SpotFalloff::Quartic,
-            power: Vec3::ONE,
-        }
-    }
-
-    fn field_of(light: &Light) -> String {
-        check_light(light).unwrap_err().field
-    }
-
-    #[test]
-    fn lights_built_in_code_are_checked_field_by_field() {
-        assert_eq!(check_light(&spot(30.0, 25.0)), Ok(()));
-        assert_eq!(check_light(&spot(180.0, 0.0)), Ok(()));
-        assert_eq!(field_of(&spot(0.0, 0.0)), "cone_angle_degrees");
-        assert_eq!(field_of(&spot(190.0, 0.0)), "cone_angle_degrees");
-        assert_eq!(field_of(&spot(f32::NAN, 0.0)), "cone_angle_degrees");
-        assert_eq!(field_of(&spot(30.0, 31.0)), "falloff_start_degrees");
-        assert_eq!(field_of(&spot(30.0, -1.0)), "falloff_start_degrees");
-        let not_unit = Light::Distant {
-            direction: Vec3::new(0.0, -2.0, 0.0),
-            irradiance: Vec3::ONE,
-        };
-        let e = check_light(&not_unit).unwrap_err();
-        assert_eq!(e.field, "direction");
-        assert!(e.message.contains("unit"), "{e}");
-        let dark = Light::Environment {
-            radiance: Vec3::new(0.0, -1.0, 0.0),
-        };
-        assert_eq!(field_of(&dark), "radiance[1]");
-        let flat = Light::Mesh {
-            mesh: TriangleMesh {
-                positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
-                triangles: vec![[0, 1, 2]],
-                ..Default::default()
-            },
-            power: Vec3::ONE,
-            two_sided: false,
-        };
-        assert_eq!(field_of(&flat), "mesh.triangles[0]");
-        let e: String = check_light(&flat).unwrap_err().into();
-        assert_eq!(e, "mesh.triangles[0]: has zero area");
-    }
-
-    #[test]
-    fn tints_above_one_are_refused() {
-        let mirror = Material::Mirror {
-            tint: Vec3::new(0.5, 1.5, 1.0),
-        };
-        assert_eq!(check_material(&mirror).unwrap_err().field, "tint[1]");
-        let glass = Material::Glass {
-            ior: 1.5,
-            reflect_tint: Vec3::ONE,
-            transmit_tint: Vec3::new(1.0, 1.0, f32::NAN),
-        };
-        assert_eq!(
-            check_material(&glass).unwrap_err().field,
-            "transmit_tint[2]"
-        );
-        assert_eq!(check_material(&Material::clear_glass(1.5)), Ok(()));
-        assert_eq!(check_material(&Material::MIRROR), Ok(()));
-    }
-}
+#[path = "rules_tests.rs"]
+mod tests;

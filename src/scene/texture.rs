@@ -190,6 +190,23 @@ impl Texture {
         }
     }
 
+    /// Whether every value it can take is grey (its three channels equal), as a float
+    /// texture's are: a colour texture given where one number is read loses nothing.
+    pub fn is_grey(&self) -> bool {
+        let grey = |c: &Vec3| c.x == c.y && c.y == c.z;
+        match self {
+            Texture::Constant(c) => grey(c),
+            Texture::Image { image, .. } => image.texels.iter().all(grey),
+            Texture::Checkerboard { even, odd, .. } => even.is_grey() && odd.is_grey(),
+            Texture::Scale(a, b) => a.is_grey() && b.is_grey(),
+            Texture::Mix {
+                first,
+                second,
+                amount,
+            } => first.is_grey() && second.is_grey() && amount.is_grey(),
+        }
+    }
+
     /// The constant this texture is, if it is one.
     pub fn as_constant(&self) -> Option<Vec3> {
         match self {
@@ -245,6 +262,16 @@ impl Texture {
     }
 }
 
+/// One number for a colour: a grey colour's channel exactly, else the channels' mean.
+#[inline]
+pub fn channel_mean(c: Vec3) -> f32 {
+    if c.x == c.y && c.y == c.z {
+        c.x
+    } else {
+        (c.x + c.y + c.z) / 3.0
+    }
+}
+
 /// A shape's alpha cut-out (pbrt's float `alpha` and `shadowalpha`): where alpha is 0 the
 /// shape is not there, where it is 1 (or more) it is, and in between it is there for that
 /// fraction of rays (pbrt-v4's stochastic alpha; pbrt-v3 cuts at exactly 0 only, the same on
@@ -278,6 +305,11 @@ pub enum TexturedParameter {
     TransmitTint,
     /// A glass's index of refraction (a float texture).
     Ior,
+    /// A parameter of a BSDF material's model ([`crate::bsdf::Model::set`] keeps it in range).
+    Model(crate::bsdf::ModelParameter),
+    /// A mix's `amount`: the mean of the texture's channels (a float texture's value), clamped
+    /// to [0, 1].
+    MixAmount,
 }
 
 /// A material (by its index in [`super::SceneDescription::materials`], which holds its
@@ -291,7 +323,8 @@ pub struct TexturedMaterial {
 impl TexturedMaterial {
     /// `base` (the material's untextured values) with its textured parameters evaluated at
     /// `uv`. Colours are clamped to [0, 1] and an index of refraction to at least 1, the
-    /// range dpm's materials keep (pbrt clamps reflectances at 0 only).
+    /// range dpm's materials keep (pbrt clamps reflectances at 0 only); a model's parameters
+    /// as [`crate::bsdf::Model::set`] keeps them.
     pub fn evaluate(&self, base: &super::Material, uv: Vec2) -> super::Material {
         use super::Material;
         let mut material = *base;
@@ -309,9 +342,11 @@ impl TexturedMaterial {
                 }
                 (Material::Glass { ior, .. }, TexturedParameter::Ior) => *ior = v.x.max(1.0),
                 (Material::Bsdf(model), TexturedParameter::Albedo) => {
-                    if let Some(kd) = model.diffuse_mut() {
-                        *kd = colour;
-                    }
+                    model.set(crate::bsdf::ModelParameter::Diffuse, v)
+                }
+                (Material::Bsdf(model), TexturedParameter::Model(p)) => model.set(*p, v),
+                (Material::Mix { amount, .. }, TexturedParameter::MixAmount) => {
+                    *amount = channel_mean(v).clamp(0.0, 1.0)
                 }
                 // A parameter the material does not have: the readers never pair them.
                 _ => {}

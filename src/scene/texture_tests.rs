@@ -154,3 +154,40 @@ fn textured_material_replaces_only_its_textured_parameters_and_clamps_them() {
         }
     );
 }
+
+#[test]
+fn a_textured_roughness_is_remapped_at_each_hit() {
+    use crate::bsdf::{Axes, Model, ModelParameter, Remap};
+    let plastic = Material::Bsdf(Model::Plastic {
+        kd: Vec3::splat(0.5),
+        ks: Vec3::splat(0.25),
+        alpha: Vec2::splat(0.5),
+    });
+    // 0.1 on the even squares of a checkerboard, 0.4 on the odd ones.
+    let textured = TexturedMaterial {
+        material: 0,
+        textures: vec![(
+            TexturedParameter::Model(ModelParameter::Roughness {
+                axes: Axes::Both,
+                remap: Remap::PbrtV3,
+                conductor: false,
+            }),
+            Texture::Checkerboard {
+                mapping: UvMapping {
+                    scale: Vec2::splat(2.0),
+                    delta: Vec2::ZERO,
+                },
+                even: Box::new(Texture::Constant(Vec3::splat(0.1))),
+                odd: Box::new(Texture::Constant(Vec3::splat(0.4))),
+            },
+        )],
+    };
+    let alpha_at = |u: f32, v: f32| match textured.evaluate(&plastic, Vec2::new(u, v)) {
+        Material::Bsdf(Model::Plastic { alpha, .. }) => alpha,
+        other => panic!("{other:?}"),
+    };
+    let v3 = crate::bsdf::pbrt_v3_roughness_to_alpha;
+    assert_eq!(alpha_at(0.25, 0.25), Vec2::splat(v3(0.1)));
+    assert_eq!(alpha_at(0.75, 0.25), Vec2::splat(v3(0.4)));
+    assert_ne!(v3(0.1), 0.1);
+}

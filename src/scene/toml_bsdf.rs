@@ -8,7 +8,7 @@ use super::SceneError;
 use super::document::Document;
 use super::format::ColourSpec;
 use super::metals::named_metal;
-use crate::bsdf::Model;
+use crate::bsdf::{Model, ModelParameter};
 use glam::{Vec2, Vec3};
 use serde::Deserialize;
 
@@ -36,15 +36,15 @@ impl Roughness {
 pub(crate) struct BsdfSpec {
     pub kd: Option<ColourSpec>,
     pub reflectance: Option<ColourSpec>,
-    pub ks: Option<[f32; 3]>,
-    pub kr: Option<[f32; 3]>,
-    pub kt: Option<[f32; 3]>,
-    pub opacity: Option<[f32; 3]>,
-    pub reflect: Option<[f32; 3]>,
-    pub transmit: Option<[f32; 3]>,
-    pub transmittance: Option<[f32; 3]>,
-    pub reflect_tint: Option<[f32; 3]>,
-    pub transmit_tint: Option<[f32; 3]>,
+    pub ks: Option<ColourSpec>,
+    pub kr: Option<ColourSpec>,
+    pub kt: Option<ColourSpec>,
+    pub opacity: Option<ColourSpec>,
+    pub reflect: Option<ColourSpec>,
+    pub transmit: Option<ColourSpec>,
+    pub transmittance: Option<ColourSpec>,
+    pub reflect_tint: Option<ColourSpec>,
+    pub transmit_tint: Option<ColourSpec>,
     pub albedo: Option<[f32; 3]>,
     pub roughness: Option<Roughness>,
     pub interface_roughness: Option<Roughness>,
@@ -112,115 +112,139 @@ pub(crate) fn check_fields(
     Ok(())
 }
 
-/// The model of a material of type `kind`; `colour` reads the (possibly textured) diffuse
-/// colour `kd` or `reflectance`, with its default.
-/// Reads a (possibly textured) colour field with its default.
+/// Reads a (possibly textured) colour field: its name, its value if given, its default, and
+/// the model parameter a texture there gives.
 pub(crate) type ColourReader<'a> =
-    dyn FnMut(&str, Option<&ColourSpec>, f32) -> Result<Vec3, SceneError> + 'a;
+    dyn FnMut(&str, Option<&ColourSpec>, f32, ModelParameter) -> Result<Vec3, SceneError> + 'a;
 
+impl BsdfSpec {
+    /// The colour field `name`, if given.
+    fn colour_field(&self, name: &str) -> Option<&ColourSpec> {
+        match name {
+            "kd" => self.kd.as_ref(),
+            "reflectance" => self.reflectance.as_ref(),
+            "ks" => self.ks.as_ref(),
+            "kr" => self.kr.as_ref(),
+            "kt" => self.kt.as_ref(),
+            "opacity" => self.opacity.as_ref(),
+            "reflect" => self.reflect.as_ref(),
+            "transmit" => self.transmit.as_ref(),
+            "transmittance" => self.transmittance.as_ref(),
+            "reflect_tint" => self.reflect_tint.as_ref(),
+            "transmit_tint" => self.transmit_tint.as_ref(),
+            _ => None,
+        }
+    }
+}
+
+/// The model of a material of type `kind`; `read` reads its colour fields (textured or not).
 pub(crate) fn model(
     kind: &str,
     spec: &BsdfSpec,
-    colour: &mut ColourReader,
+    read: &mut ColourReader,
     refuse: &dyn Fn(&str, String) -> SceneError,
 ) -> Result<Model, SceneError> {
+    use ModelParameter as P;
     let rgb = |c: Option<[f32; 3]>, default: f32| c.map_or(Vec3::splat(default), Vec3::from_array);
-    let mut diffuse = |name: &str, default: f32| {
-        let given = if name == "kd" {
-            spec.kd.as_ref()
-        } else {
-            spec.reflectance.as_ref()
-        };
-        colour(name, given, default)
+    let mut colour = |name: &str, default: f32, parameter: ModelParameter| {
+        read(name, spec.colour_field(name), default, parameter)
     };
     let ior = spec.ior.unwrap_or(1.5);
-    let conductor = |spec: &BsdfSpec| -> Result<(Vec3, Vec3), SceneError> {
-        if let Some(name) = &spec.metal {
-            return named_metal(name).ok_or_else(|| {
-                refuse(
-                    "metal",
-                    format!("`{name}` is not a metal dpm knows (Cu, Au, Ag, Al)"),
-                )
-            });
-        }
-        if let Some(Some(r)) = spec.reflectance.as_ref().map(|c| match c {
-            ColourSpec::Rgb(rgb) => Some(Vec3::from_array(*rgb)),
-            ColourSpec::Texture(_) => None,
-        }) {
-            let r = r.clamp(Vec3::ZERO, Vec3::splat(0.9999));
-            return Ok((Vec3::ONE, 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5)));
-        }
-        match (spec.eta, spec.k) {
-            (None, None) => Ok(named_metal("Cu").expect("copper is known")),
-            (eta, k) => Ok((rgb(eta, 1.0), rgb(k, 0.0))),
-        }
+    let (eta, k) = match kind {
+        "conductor" | "coated_conductor" => conductor(
+            spec,
+            &mut |name, parameter| colour(name, 1.0, parameter),
+            refuse,
+        )?,
+        _ => (Vec3::ONE, Vec3::ZERO),
     };
     Ok(match kind {
         "plastic" => Model::Plastic {
-            kd: diffuse("kd", 0.25)?,
-            ks: rgb(spec.ks, 0.25),
+            kd: colour("kd", 0.25, P::Diffuse)?,
+            ks: colour("ks", 0.25, P::Specular)?,
             alpha: Roughness::alpha(spec.roughness, 0.1),
         },
         "substrate" => Model::Substrate {
-            kd: diffuse("kd", 0.5)?,
-            ks: rgb(spec.ks, 0.5),
+            kd: colour("kd", 0.5, P::Diffuse)?,
+            ks: colour("ks", 0.5, P::Specular)?,
             alpha: Roughness::alpha(spec.roughness, 0.1),
         },
         "uber" => Model::Uber {
-            kd: diffuse("kd", 0.25)?,
-            ks: rgb(spec.ks, 0.25),
-            kr: rgb(spec.kr, 0.0),
-            kt: rgb(spec.kt, 0.0),
+            kd: colour("kd", 0.25, P::Diffuse)?,
+            ks: colour("ks", 0.25, P::Specular)?,
+            kr: colour("kr", 0.0, P::Reflection)?,
+            kt: colour("kt", 0.0, P::Transmission)?,
             alpha: Roughness::alpha(spec.roughness, 0.1),
             eta: ior,
-            opacity: rgb(spec.opacity, 1.0),
+            opacity: colour("opacity", 1.0, P::Opacity)?,
         },
         "translucent" => Model::Translucent {
-            kd: diffuse("kd", 0.25)?,
-            ks: rgb(spec.ks, 0.25),
-            reflect: rgb(spec.reflect, 0.5),
-            transmit: rgb(spec.transmit, 0.5),
+            kd: colour("kd", 0.25, P::Diffuse)?,
+            ks: colour("ks", 0.25, P::Specular)?,
+            reflect: colour("reflect", 0.5, P::Reflect)?,
+            transmit: colour("transmit", 0.5, P::Transmit)?,
             alpha: Roughness::alpha(spec.roughness, 0.1),
         },
-        "conductor" => {
-            let (eta, k) = conductor(spec)?;
-            Model::Conductor {
-                eta,
-                k,
-                alpha: Roughness::alpha(spec.roughness, 0.1),
-            }
-        }
+        "conductor" => Model::Conductor {
+            eta,
+            k,
+            alpha: Roughness::alpha(spec.roughness, 0.1),
+        },
         "rough_glass" => Model::Dielectric {
             eta: ior,
             alpha: Roughness::alpha(spec.roughness, 0.1),
-            reflect_tint: rgb(spec.reflect_tint, 1.0),
-            transmit_tint: rgb(spec.transmit_tint, 1.0),
+            reflect_tint: colour("reflect_tint", 1.0, P::Reflection)?,
+            transmit_tint: colour("transmit_tint", 1.0, P::Transmission)?,
         },
         "thin_glass" => Model::ThinDielectric { eta: ior },
         "coated_diffuse" => Model::CoatedDiffuse {
-            reflectance: diffuse("reflectance", 0.5)?,
+            reflectance: colour("reflectance", 0.5, P::Diffuse)?,
             alpha: Roughness::alpha(spec.roughness, 0.0),
             eta: ior,
             thickness: spec.thickness.unwrap_or(0.01),
             albedo: rgb(spec.albedo, 0.0),
             g: spec.g.unwrap_or(0.0),
         },
-        "coated_conductor" => {
-            let (conductor_eta, conductor_k) = conductor(spec)?;
-            Model::CoatedConductor {
-                interface_alpha: Roughness::alpha(spec.interface_roughness, 0.0),
-                interface_eta: ior,
-                thickness: spec.thickness.unwrap_or(0.01),
-                albedo: rgb(spec.albedo, 0.0),
-                g: spec.g.unwrap_or(0.0),
-                conductor_eta,
-                conductor_k,
-                conductor_alpha: Roughness::alpha(spec.conductor_roughness, 0.0),
-            }
-        }
+        "coated_conductor" => Model::CoatedConductor {
+            interface_alpha: Roughness::alpha(spec.interface_roughness, 0.0),
+            interface_eta: ior,
+            thickness: spec.thickness.unwrap_or(0.01),
+            albedo: rgb(spec.albedo, 0.0),
+            g: spec.g.unwrap_or(0.0),
+            conductor_eta: eta,
+            conductor_k: k,
+            conductor_alpha: Roughness::alpha(spec.conductor_roughness, 0.0),
+        },
         _ => Model::DiffuseTransmission {
-            reflectance: diffuse("reflectance", 0.25)?,
-            transmittance: rgb(spec.transmittance, 0.25),
+            reflectance: colour("reflectance", 0.25, P::Diffuse)?,
+            transmittance: colour("transmittance", 0.25, P::Transmit)?,
         },
     })
+}
+
+/// A conductor's (η, k): a named `metal`, a (possibly textured) normal-incidence
+/// `reflectance` (η = 1, k = 2√r/√(1 − r)), `eta` and `k`, or copper.
+fn conductor(
+    spec: &BsdfSpec,
+    reflectance: &mut dyn FnMut(&str, ModelParameter) -> Result<Vec3, SceneError>,
+    refuse: &dyn Fn(&str, String) -> SceneError,
+) -> Result<(Vec3, Vec3), SceneError> {
+    let rgb = |c: Option<[f32; 3]>, default: f32| c.map_or(Vec3::splat(default), Vec3::from_array);
+    if let Some(name) = &spec.metal {
+        return named_metal(name).ok_or_else(|| {
+            refuse(
+                "metal",
+                format!("`{name}` is not a metal dpm knows (Cu, Au, Ag, Al)"),
+            )
+        });
+    }
+    if spec.reflectance.is_some() {
+        let r = reflectance("reflectance", ModelParameter::ConductorReflectance)?;
+        let r = r.clamp(Vec3::ZERO, Vec3::splat(0.9999));
+        return Ok((Vec3::ONE, 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5)));
+    }
+    match (spec.eta, spec.k) {
+        (None, None) => Ok(named_metal("Cu").expect("copper is known")),
+        (eta, k) => Ok((rgb(eta, 1.0), rgb(k, 0.0))),
+    }
 }

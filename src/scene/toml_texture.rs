@@ -42,7 +42,8 @@ pub(crate) fn colour(
     ))
 }
 
-fn texture(
+/// The texture a texture table at `path` describes.
+pub(crate) fn texture(
     doc: &Document,
     path: &str,
     spec: &TextureSpec,

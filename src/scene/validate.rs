@@ -65,6 +65,10 @@ impl MaterialTable {
         })
     }
 
+    pub(crate) fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
     pub(crate) fn into_materials(self) -> Vec<Material> {
         self.materials
     }
@@ -307,11 +311,13 @@ fn spot_falloff(doc: &Document, path: &str, name: &str) -> Result<SpotFalloff, S
         })
 }
 
+/// The material at `path`; `names` gives each `[materials]` entry's index, for a mix.
 pub(crate) fn material(
     doc: &Document,
     path: &str,
     spec: &MaterialSpec,
     images: &ImageSource,
+    names: &HashMap<&str, u32>,
 ) -> Result<(Material, Vec<(TexturedParameter, Texture)>), SceneError> {
     let mut textures = Vec::new();
     let mut colour = |field: &str,
@@ -346,14 +352,17 @@ pub(crate) fn material(
             )?,
         },
         MaterialSpec::Bsdf(kind, spec) => {
-            let mut diffuse = |field: &str, given: Option<&ColourSpec>, default: f32| match given {
-                None => Ok(Vec3::splat(default)),
-                Some(_) => colour(field, given, TexturedParameter::Albedo),
-            };
+            let mut read =
+                |field: &str, given: Option<&ColourSpec>, default: f32, parameter| match given {
+                    None => Ok(Vec3::splat(default)),
+                    Some(_) => colour(field, given, TexturedParameter::Model(parameter)),
+                };
             let refuse =
                 |field: &str, message: String| doc.error(&child_path(path, field), message);
-            Material::Bsdf(super::toml_bsdf::model(kind, spec, &mut diffuse, &refuse)?)
+            Material::Bsdf(super::toml_bsdf::model(kind, spec, &mut read, &refuse)?)
         }
+        // Checked on its own: it has no colours.
+        MaterialSpec::Mix(mix) => return super::toml_mix::mix(doc, path, mix, names, images),
     };
     check_material(&material).map_err(at(doc, path))?;
     Ok((material, textures))
@@ -474,7 +483,11 @@ pub(crate) fn mesh_placement(
 /// triangle mesh (one material's part of an OBJ, or a quad... which is never closed) in which
 /// every edge is shared by exactly two triangles; inside is decided by ray parity.
 pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<String> {
-    let opaque = |m: u32| !matches!(scene.materials[m as usize], Material::Glass { .. });
+    let materials = &scene.materials;
+    let opaque = |m: u32| {
+        let glass = |m: &Material| matches!(m, Material::Glass { .. });
+        !materials[m as usize].any_shown(materials, &glass)
+    };
     let mut warnings = Vec::new();
     for (s, shape) in scene.shapes.iter().enumerate() {
         let inside: Box<dyn Fn(Vec3) -> bool> = match shape {

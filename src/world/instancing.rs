@@ -80,7 +80,8 @@ impl Instancing {
                 parts.surfaces.push(Surface::Material(material));
                 parts.normals.push(normals);
                 (lo, hi) = (lo.min(a), hi.max(b));
-                if description.materials[material as usize].makes_caustics(glossy_min_alpha) {
+                let table = &description.materials;
+                if table[material as usize].makes_caustics(table, glossy_min_alpha) {
                     (spec_lo, spec_hi) = (spec_lo.min(a), spec_hi.max(b));
                     specular.push(shape);
                 }

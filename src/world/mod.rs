@@ -194,6 +194,9 @@ pub struct World {
     /// The probability with which a global photon's diffuse bounce is aimed at the caustic
     /// targets instead of drawn by the cosine ([`World::diffuse_bounce_aim`]).
     pub diffuse_bounce_aim: f32,
+    /// By material id, whether it is a mix that reads photons
+    /// ([`World::keeps_photon_on_mix`]); empty in a scene without mixes.
+    mixes_reading_photons: Vec<bool>,
 }
 
 /// [`World::diffuse_bounce_aim`] in a scene whose one diffuse object sees itself only through
@@ -226,7 +229,8 @@ impl World {
             normals.push(hit_normals);
             lo = lo.min(a);
             hi = hi.max(b);
-            if description.materials[material as usize].makes_caustics(glossy_min_alpha) {
+            let table = &description.materials;
+            if table[material as usize].makes_caustics(table, glossy_min_alpha) {
                 spec_lo = spec_lo.min(a);
                 spec_hi = spec_hi.max(b);
                 specular_shapes.push(shape);
@@ -346,7 +350,19 @@ impl World {
             .cloned()
             .collect();
         let texturing = texturing::Texturing::new(&description);
+        let materials = &description.materials;
+        let mixes_reading_photons =
+            match materials.iter().any(|m| matches!(m, Material::Mix { .. })) {
+                false => Vec::new(),
+                true => (materials.iter())
+                    .map(|m| {
+                        matches!(m, Material::Mix { .. })
+                            && m.is_diffuse_receiver(materials, glossy_min_alpha)
+                    })
+                    .collect(),
+            };
         let mut world = Self {
+            mixes_reading_photons,
             texturing,
             description,
             accel,
@@ -389,9 +405,22 @@ impl World {
         crate::bsdf::Bsdf::split_at(model, self.glossy_min_alpha)
     }
 
-    /// Whether photons stay on material `id` and camera paths read the maps there.
+    /// Whether photons stay on material `id` and camera paths read the maps there (a mix:
+    /// where either of its materials does).
     pub fn reads_photons(&self, id: u32) -> bool {
-        self.material(id).is_diffuse_receiver(self.glossy_min_alpha)
+        let materials = &self.description.materials;
+        self.material(id)
+            .is_diffuse_receiver(materials, self.glossy_min_alpha)
+    }
+
+    /// Whether a photon landing on material `id` where the point shows `shown` (what
+    /// [`World::material_at`] gave there) is kept although `shown` keeps none: `id` is a mix
+    /// that reads photons elsewhere, and the maps' density counts every photon landing on
+    /// the whole surface, whichever material its point shows.
+    #[inline]
+    pub fn keeps_photon_on_mix(&self, id: u32, shown: &Material) -> bool {
+        self.mixes_reading_photons.get(id as usize) == Some(&true)
+            && !shown.is_diffuse_receiver(&[], self.glossy_min_alpha)
     }
 
     /// Offset for spawning rays off a surface: relative to the scene's size so the picture
@@ -407,14 +436,26 @@ impl World {
     }
 
     /// Material `id` at `hit`: its textured parameters evaluated at the hit's (u, v), the
-    /// material itself when it has none.
+    /// material itself when it has none; a mix resolved (its amount evaluated first) to the
+    /// material the hit's point shows, and that one's textures evaluated. Never a mix.
     #[inline(always)]
     pub fn material_at(&self, id: u32, hit: &Interaction) -> Material {
-        let base = &self.description.materials[id as usize];
-        match self.texturing.textured(id) {
-            None => *base,
-            Some(textured) => textured.evaluate(base, self.uv_at(hit)),
+        let mut id = id;
+        for _ in 0..=crate::scene::MAX_MIX_DEPTH {
+            let base = &self.description.materials[id as usize];
+            let material = match self.texturing.textured(id) {
+                None => *base,
+                Some(textured) => textured.evaluate(base, self.uv_at(hit)),
+            };
+            match material {
+                Material::Mix { materials, amount } => {
+                    id = texturing::mix_choice(materials, amount, hit.position)
+                }
+                shown => return shown,
+            }
         }
+        // Mixes nested deeper than a checked scene holds them: nothing to show.
+        Material::Diffuse { albedo: Vec3::ZERO }
     }
 
     /// The texture coordinates at `hit` (zero on geometries without textures).

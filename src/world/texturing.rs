@@ -1,11 +1,14 @@
 //! Textured materials at a hit: each geometry's texture coordinates, laid out for resolving a
 //! hit's (u, v), and the textured materials by material id. Owns turning a hit into (u, v) —
 //! barycentric interpolation of a triangle's corners, pbrt's parametric (φ/2π, 1 − θ/π) on
-//! a sphere, pbrt's (along, across) on a curve — and a material's values there. Built only for geometries whose material has
-//! textures, so a scene without textures carries nothing here and takes no extra work. Must
-//! not trace rays.
+//! a sphere, pbrt's (along, across) on a curve — a material's values there, and which of a
+//! mix's materials a point shows ([`mix_choice`]). Built only for geometries whose material
+//! has textures (or is a mix reaching one), so a scene without textures carries nothing here
+//! and takes no extra work. Must not trace rays.
 
-use crate::scene::{CurveKind, SceneDescription, Shape, TexturedMaterial, TriangleMesh};
+use crate::scene::{
+    CurveKind, MAX_MIX_DEPTH, Material, SceneDescription, Shape, TexturedMaterial, TriangleMesh,
+};
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -54,18 +57,21 @@ impl Texturing {
         for t in &description.textured_materials {
             by_material[t.material as usize] = Some(t.clone());
         }
+        // A geometry needs its (u, v) where its material, or one a mix of it shows, has
+        // textures.
+        let needs_uv: Vec<bool> = (0..description.materials.len())
+            .map(|id| reaches_texture(description, &by_material, id as u32, 0))
+            .collect();
         let uvs = |shapes: &[Shape]| -> Vec<GeometryUv> {
             (shapes.iter())
                 .map(|shape| match shape {
                     Shape::Sphere {
                         center, material, ..
-                    } if by_material[*material as usize].is_some() => {
-                        GeometryUv::Sphere { center: *center }
-                    }
-                    Shape::Triangles(mesh) if by_material[mesh.material as usize].is_some() => {
+                    } if needs_uv[*material as usize] => GeometryUv::Sphere { center: *center },
+                    Shape::Triangles(mesh) if needs_uv[mesh.material as usize] => {
                         GeometryUv::Triangles(corner_uvs(mesh))
                     }
-                    Shape::Curves(curves) if by_material[curves.material as usize].is_some() => {
+                    Shape::Curves(curves) if needs_uv[curves.material as usize] => {
                         match curves.kind {
                             CurveKind::Cylinder => GeometryUv::Tube(
                                 (curves.points.chunks_exact(4))
@@ -155,6 +161,50 @@ impl Texturing {
     }
 }
 
+/// Whether material `id` has textures, or is a mix (`depth` mixes below the first) one of whose
+/// materials reaches one.
+fn reaches_texture(
+    description: &SceneDescription,
+    by_material: &[Option<TexturedMaterial>],
+    id: u32,
+    depth: usize,
+) -> bool {
+    if by_material[id as usize].is_some() {
+        return true;
+    }
+    match description.materials[id as usize] {
+        Material::Mix { materials, .. } if depth < MAX_MIX_DEPTH => {
+            (materials.iter()).any(|&m| reaches_texture(description, by_material, m, depth + 1))
+        }
+        _ => false,
+    }
+}
+
+/// Which of a mix's `materials` the surface shows at `position`: `materials[1]` with
+/// probability `amount`, as pbrt-v4's `MixMaterial` chooses (at most 0: the first, at least
+/// 1: the second, else the second where a uniform u is at most `amount`), u a hash of the
+/// position's bits and the two ids. Every ray that meets the point, photon or camera path,
+/// on any thread, in any pass, sees the same material, and neighbouring points choose apart.
+#[inline]
+pub fn mix_choice(materials: [u32; 2], amount: f32, position: Vec3) -> u32 {
+    if amount.is_nan() || amount <= 0.0 {
+        return materials[0];
+    }
+    if amount >= 1.0 {
+        return materials[1];
+    }
+    let bits = position.to_array().map(f32::to_bits);
+    let h = (bits.into_iter().chain(materials)).fold(0x6d69_785f_6d61_7465, |h, word| {
+        crate::sampling::mix(h, u64::from(word))
+    });
+    let u = (h >> 40) as f32 / (1u64 << 24) as f32;
+    if amount < u {
+        materials[0]
+    } else {
+        materials[1]
+    }
+}
+
 #[inline]
 fn geometry_uv(uv: Option<&GeometryUv>, primitive: u32, barycentric: Vec2, position: Vec3) -> Vec2 {
     match uv {
@@ -193,5 +243,41 @@ pub(super) fn corner_uvs(mesh: &TriangleMesh) -> Vec<[Vec2; 3]> {
             .map(|t| t.map(|i| uvs[i as usize]))
             .collect(),
         None => vec![DEFAULT_CORNER_UVS; mesh.triangles.len()],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mix_shows_its_second_material_with_probability_amount_and_the_same_one_twice() {
+        let pair = [3, 8];
+        let at = |i: u32| Vec3::new(i as f32 * 1e-3, 0.5, (i % 97) as f32 * 0.01);
+        for amount in [0.1f32, 0.5, 0.85] {
+            let n = 200_000;
+            let second = (0..n)
+                .filter(|&i| mix_choice(pair, amount, at(i)) == 8)
+                .count();
+            let share = second as f32 / n as f32;
+            // The share's standard deviation is at most 0.0012.
+            assert!((share - amount).abs() < 0.006, "{amount}: {share}");
+        }
+        for i in 0..1000 {
+            let p = at(i);
+            assert_eq!(mix_choice(pair, 0.4, p), mix_choice(pair, 0.4, p));
+            // Never past its ends, and a NaN amount is the first material.
+            assert_eq!(mix_choice(pair, 0.0, p), 3);
+            assert_eq!(mix_choice(pair, -1.0, p), 3);
+            assert_eq!(mix_choice(pair, f32::NAN, p), 3);
+            assert_eq!(mix_choice(pair, 1.0, p), 8);
+        }
+        // The pair's ids enter the hash: two mixes over one point choose apart.
+        let apart = (0..10_000)
+            .filter(|&i| {
+                (mix_choice([3, 8], 0.5, at(i)) == 8) != (mix_choice([4, 9], 0.5, at(i)) == 9)
+            })
+            .count();
+        assert!((4000..6000).contains(&apart), "{apart}");
     }
 }

@@ -4,7 +4,8 @@
 //! nothing of the file formats that use them.
 
 use crate::scene::{
-    Curves, Light, Material, SceneDescription, Shape, SpotFalloff, Texture, TriangleMesh,
+    Curves, Light, Material, SceneDescription, Shape, SpotFalloff, Texture, TexturedParameter,
+    TriangleMesh,
 };
 use glam::Vec3;
 
@@ -184,6 +185,12 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
                 h.vec3(*reflect_tint);
                 h.vec3(*transmit_tint);
             }
+            Material::Mix { materials, amount } => {
+                h.u32(4);
+                h.u32(materials[0]);
+                h.u32(materials[1]);
+                h.f32(*amount);
+            }
             Material::Bsdf(model) => {
                 h.u32(3);
                 // Every parameter, exactly: `Debug` prints each f32 so that it reads back.
@@ -218,7 +225,7 @@ pub fn scene_fingerprint(scene: &SceneDescription) -> u64 {
             h.u32(textured.material);
             h.u64(textured.textures.len() as u64);
             for (parameter, texture) in &textured.textures {
-                h.u32(*parameter as u32);
+                h.parameter(parameter);
                 h.texture(texture);
             }
         }
@@ -281,6 +288,26 @@ fn shapes(h: &mut Fnv64, shapes: &[Shape]) {
 }
 
 impl Fnv64 {
+    /// The parameters that textures gave before models had their own keep their numbers, so
+    /// those scenes' fingerprints stay what they were.
+    fn parameter(&mut self, parameter: &TexturedParameter) {
+        match parameter {
+            TexturedParameter::Albedo => self.u32(0),
+            TexturedParameter::Tint => self.u32(1),
+            TexturedParameter::ReflectTint => self.u32(2),
+            TexturedParameter::TransmitTint => self.u32(3),
+            TexturedParameter::Ior => self.u32(4),
+            TexturedParameter::Model(p) => {
+                self.u32(5);
+                // Every field: `Debug` names the variant, its axes, remap and conductor flag.
+                format!("{p:?}")
+                    .bytes()
+                    .for_each(|b| self.u32(u32::from(b)));
+            }
+            TexturedParameter::MixAmount => self.u32(6),
+        }
+    }
+
     fn texture(&mut self, texture: &Texture) {
         match texture {
             Texture::Constant(c) => {

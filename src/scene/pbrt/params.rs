@@ -285,6 +285,21 @@ impl ParamList {
         })
     }
 
+    /// Every value of a `string` parameter (pbrt-v4's `"string materials" ["a" "b"]`).
+    pub fn strings(&self, name: &str) -> Result<Option<Vec<String>>, ParamError> {
+        let Some(p) = self.find(name) else {
+            return Ok(None);
+        };
+        let p = self.typed(p, &["string"])?;
+        (p.values.iter())
+            .map(|v| match v {
+                Value::Str(s) => Ok(s.clone()),
+                other => Err(p.error(format!("expected strings, found {}", describe(other)))),
+            })
+            .collect::<Result<_, _>>()
+            .map(Some)
+    }
+
     pub fn bool(&self, name: &str) -> Result<Option<bool>, ParamError> {
         self.one(name, &["bool"], |p| match &p.values[0] {
             Value::Bool(b) => Ok(*b),

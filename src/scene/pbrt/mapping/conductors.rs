@@ -6,6 +6,7 @@
 
 use super::super::Place;
 use super::super::params::ParamList;
+use super::glossy::Readers;
 use super::{Mapper, param_error};
 use crate::scene::SceneError;
 use glam::Vec3;
@@ -34,18 +35,43 @@ fn metal_of(name: &str) -> &str {
 
 impl Mapper<'_> {
     /// A rough conductor's (η, k), its parameters named `prefix` + `eta`, `k`, `reflectance`
-    /// (`prefix` is `conductor.` in pbrt-v4's coatedconductor).
+    /// (`prefix` is `conductor.` in pbrt-v4's coatedconductor). Textures are read through
+    /// `read`, which records them; the model holds their typical values.
     pub(super) fn conductor_eta_k(
         &self,
         params: &ParamList,
         at: &Place,
+        read: &Readers,
         prefix: &str,
     ) -> Result<(Vec3, Vec3), SceneError> {
         let p = |e| param_error("Material", e);
         let name = |n: &str| format!("{prefix}{n}");
-        if let Some(r) = params.colour(&name("reflectance")).map_err(p)? {
+        let textured = |n: &str| -> Result<bool, SceneError> {
+            Ok(params.texture(&name(n)).map_err(p)?.is_some())
+        };
+        let reflectance = if textured("reflectance")? {
+            Some((read.colour)(&name("reflectance"), 1.0)?)
+        } else {
+            params.colour(&name("reflectance")).map_err(p)?
+        };
+        if let Some(r) = reflectance {
             let r = r.clamp(Vec3::ZERO, Vec3::splat(0.9999));
             return Ok((Vec3::ONE, 2.0 * r.powf(0.5) / (Vec3::ONE - r).powf(0.5)));
+        }
+        if textured("eta")? || textured("k")? {
+            let value = |n: &str, default: f32| -> Result<Vec3, SceneError> {
+                match textured(n)? {
+                    true => (read.unbounded)(&name(n), default),
+                    false => Ok(params
+                        .colour(&name(n))
+                        .map_err(p)?
+                        .unwrap_or(Vec3::splat(default))),
+                }
+            };
+            return Ok((
+                value("eta", 1.0)?.max(Vec3::splat(1e-3)),
+                value("k", 0.0)?.max(Vec3::ZERO),
+            ));
         }
         let named = |n: &str| params.spectrum_name(&name(n));
         let (eta_name, k_name) = (named("eta"), named("k"));

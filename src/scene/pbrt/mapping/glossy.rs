@@ -8,15 +8,38 @@
 use super::super::Place;
 use super::super::params::ParamList;
 use super::{Mapper, param_error};
-use crate::bsdf::{Model, pbrt_v3_roughness_to_alpha, pbrt_v4_roughness_to_alpha};
+use crate::bsdf::{Model, Remap};
 use crate::scene::SceneError;
 use glam::{Vec2, Vec3};
 
 /// How a material's colours and floats are read (textures become their typical values,
 /// recorded by the caller).
 pub(super) struct Readers<'a> {
+    /// A colour in [0, 1], with its default.
     pub colour: &'a dyn Fn(&str, f32) -> Result<Vec3, SceneError>,
+    /// A colour that is no reflectance (a conductor's η and k): unclamped, and a float texture
+    /// may give it.
+    pub unbounded: &'a dyn Fn(&str, f32) -> Result<Vec3, SceneError>,
     pub float: &'a dyn Fn(&str) -> Result<Option<f32>, SceneError>,
+    /// An index of refraction: as `float`, a texture's typical value at least 1.
+    pub index: &'a dyn Fn(&str) -> Result<Option<f32>, SceneError>,
+}
+
+/// How material `kind` turns its roughness into α: pbrt-v4's materials by √r, pbrt-v3's by
+/// its polynomial, either not at all when `remaproughness` is false.
+pub(super) fn remap(params: &ParamList, kind: &str) -> Result<Remap, SceneError> {
+    let remap = (params.bool("remaproughness"))
+        .map_err(|e| param_error("Material", e))?
+        .unwrap_or(true);
+    let v4 = matches!(
+        kind,
+        "conductor" | "dielectric" | "coateddiffuse" | "coatedconductor"
+    );
+    Ok(match (remap, v4) {
+        (false, _) => Remap::None,
+        (true, true) => Remap::PbrtV4,
+        (true, false) => Remap::PbrtV3,
+    })
 }
 
 /// Whether `kind` is one of the materials mapped here (rough metals and glass are asked about
@@ -60,8 +83,8 @@ impl Mapper<'_> {
                 kr: colour("Kr", 0.0)?,
                 kt: colour("Kt", 0.0)?,
                 alpha: alpha("roughness", 0.1)?,
-                eta: (read.float)("index")?
-                    .or((read.float)("eta")?)
+                eta: (read.index)("index")?
+                    .or((read.index)("eta")?)
                     .unwrap_or(1.5),
                 opacity: colour("opacity", 1.0)?,
             },
@@ -78,7 +101,7 @@ impl Mapper<'_> {
                 alpha: alpha("roughness", 0.1)?,
             },
             "metal" | "conductor" => {
-                let (eta, k) = self.conductor_eta_k(params, at, "")?;
+                let (eta, k) = self.conductor_eta_k(params, at, read, "")?;
                 let default = if kind == "metal" { 0.01 } else { 0.0 };
                 Model::Conductor {
                     eta,
@@ -103,10 +126,10 @@ impl Mapper<'_> {
             },
             "coatedconductor" => {
                 let (conductor_eta, conductor_k) =
-                    self.conductor_eta_k(params, at, "conductor.")?;
+                    self.conductor_eta_k(params, at, read, "conductor.")?;
                 Model::CoatedConductor {
                     interface_alpha: alpha("interface.roughness", 0.0)?,
-                    interface_eta: (read.float)("interface.eta")?.unwrap_or(1.5),
+                    interface_eta: (read.index)("interface.eta")?.unwrap_or(1.5),
                     thickness: (read.float)("thickness")?.unwrap_or(0.01),
                     albedo: colour("albedo", 0.0)?,
                     g: (read.float)("g")?.unwrap_or(0.0),
@@ -146,23 +169,7 @@ impl Mapper<'_> {
         let v = (read.float)(&format!("{prefix}vroughness"))?
             .or(isotropic)
             .unwrap_or(default);
-        let remap = (params.bool("remaproughness"))
-            .map_err(|e| param_error("Material", e))?
-            .unwrap_or(true);
-        let v4 = matches!(
-            kind,
-            "conductor" | "dielectric" | "coateddiffuse" | "coatedconductor"
-        );
-        let map = |r: f32| {
-            let r = r.max(0.0);
-            if r == 0.0 || !remap {
-                r
-            } else if v4 {
-                pbrt_v4_roughness_to_alpha(r)
-            } else {
-                pbrt_v3_roughness_to_alpha(r)
-            }
-        };
-        Ok(Vec2::new(map(u), map(v)))
+        let remap = remap(params, kind)?;
+        Ok(Vec2::new(remap.alpha(u), remap.alpha(v)))
     }
 }

@@ -9,6 +9,7 @@ use super::super::Place;
 use super::super::params::ParamList;
 use super::textures::TextureType;
 use super::{Mapper, param_error};
+use crate::bsdf::{Axes, ModelParameter, Remap};
 use crate::scene::{Material, SceneError, Texture, TexturedParameter};
 use glam::Vec3;
 use std::cell::RefCell;
@@ -40,40 +41,59 @@ impl Mapper<'_> {
         at: &Place,
     ) -> Result<Mapped, SceneError> {
         let p = |e| param_error("Material", e);
-        // The textures read, by parameter name; the material takes their typical values.
+        // The textures read, by parameter name, each once; the material takes their typical
+        // values.
         let textured = RefCell::new(Vec::<(String, Texture)>::new());
+        let record = |name: &str, texture: Texture| {
+            let mut textured = textured.borrow_mut();
+            if !textured.iter().any(|(n, _)| n == name) {
+                textured.push((name.to_string(), texture));
+            }
+        };
         let colour = |name: &str, default: f32| -> Result<Vec3, SceneError> {
             match self.parameter_if_given(params, "Material", name, TextureType::Colour)? {
                 None => Ok(Vec3::splat(default)),
                 Some(Texture::Constant(c)) => Ok(c),
                 Some(t) => {
                     let typical = t.typical().clamp(Vec3::ZERO, Vec3::ONE);
-                    textured.borrow_mut().push((name.to_string(), t));
+                    record(name, t);
                     Ok(typical)
                 }
             }
         };
-        // An index of refraction, which a float texture may give.
-        let index = |name: &str| -> Result<Option<f32>, SceneError> {
+        let unbounded = |name: &str, default: f32| -> Result<Vec3, SceneError> {
+            match self.parameter_of_either_type(params, "Material", name)? {
+                None => Ok(Vec3::splat(default)),
+                Some(Texture::Constant(c)) => Ok(c),
+                Some(t) => {
+                    let typical = t.typical();
+                    record(name, t);
+                    Ok(typical)
+                }
+            }
+        };
+        // A float (roughness, an index, a thickness): a texture's typical value.
+        let float = |name: &str| -> Result<Option<f32>, SceneError> {
             match self.parameter_if_given(params, "Material", name, TextureType::Float)? {
                 None => Ok(None),
                 Some(Texture::Constant(c)) => Ok(Some(c.x)),
                 Some(t) => {
-                    let typical = t.typical().x.max(1.0);
-                    textured.borrow_mut().push((name.to_string(), t));
+                    let typical = t.typical().x;
+                    record(name, t);
                     Ok(Some(typical))
                 }
             }
         };
-        // A float dpm only compares with 0 (roughness, sigma): a texture's typical value.
-        let float = |name: &str| -> Result<Option<f32>, SceneError> {
-            Ok(self
-                .parameter_if_given(params, "Material", name, TextureType::Float)?
-                .map(|t| t.typical().x))
+        // An index of refraction: a texture's typical value at least 1.
+        let index = |name: &str| -> Result<Option<f32>, SceneError> {
+            let textured = params.texture(name).map_err(p)?.is_some();
+            Ok(float(name)?.map(|x| if textured { x.max(1.0) } else { x }))
         };
         let read = super::glossy::Readers {
             colour: &colour,
+            unbounded: &unbounded,
             float: &float,
+            index: &index,
         };
         let exact = |material| Mapped {
             material,
@@ -114,7 +134,7 @@ impl Mapper<'_> {
                     None => index("eta")?.unwrap_or(1.5),
                 };
                 if roughness(&["roughness", "uroughness", "vroughness"])? > 0.0 {
-                    exact(as_material(
+                    exact(Material::Bsdf(
                         self.glossy_model(kind, params, at, &read, ior)?,
                     ))
                 } else {
@@ -147,7 +167,7 @@ impl Mapper<'_> {
                     };
                 let rough = roughness(&["roughness", "uroughness", "vroughness"])?;
                 if kind == "thindielectric" || rough > 0.0 {
-                    exact(as_material(
+                    exact(Material::Bsdf(
                         self.glossy_model(kind, params, at, &read, ior)?,
                     ))
                 } else {
@@ -166,7 +186,10 @@ impl Mapper<'_> {
                     }
                     None => default_roughness,
                 };
-                if rough == 0.0 {
+                // A textured η or k varies over the surface: a conductor model, however smooth.
+                let textured_index = params.texture("eta").map_err(p)?.is_some()
+                    || params.texture("k").map_err(p)?.is_some();
+                if rough == 0.0 && !textured_index {
                     params.bool("remaproughness").map_err(p)?;
                     let reflectance = if params.texture("reflectance").map_err(p)?.is_some() {
                         colour("reflectance", 1.0)?
@@ -175,14 +198,14 @@ impl Mapper<'_> {
                     };
                     exact(Material::Mirror { tint: reflectance })
                 } else {
-                    exact(as_material(
+                    exact(Material::Bsdf(
                         self.glossy_model(kind, params, at, &read, 1.0)?,
                     ))
                 }
             }
             kind if super::glossy::is_glossy_kind(kind) => {
-                let eta = (float("eta")?).unwrap_or(1.5);
-                exact(as_material(
+                let eta = (index("eta")?).unwrap_or(1.5);
+                exact(Material::Bsdf(
                     self.glossy_model(kind, params, at, &read, eta)?,
                 ))
             }
@@ -204,7 +227,7 @@ impl Mapper<'_> {
                     format!("material \"{kind}\" scatters light in a participating medium under the surface, and dpm has no media; use glass or a diffuse material"),
                 ));
             }
-            "mix" | "disney" => {
+            "disney" => {
                 return Err(at.error(
                     "Material",
                     format!("material \"{kind}\" has no part dpm can render (dpm has diffuse, mirror and glass)"),
@@ -220,15 +243,36 @@ impl Mapper<'_> {
                 return Err(at.error("Material", format!("\"{other}\" is not a pbrt material")));
             }
         };
-        let mut mapped = mapped;
-        if let Material::Bsdf(model) = &mapped.material {
-            mapped.approximation = mapped.approximation.or_else(|| approximation(kind, model));
+        let remap = super::glossy::remap(params, kind)?;
+        // pbrt-v4's diffuse transmitter scales both its colours by `scale`.
+        let scale = match kind {
+            "diffusetransmission" => float("scale")?.unwrap_or(1.0),
+            _ => 1.0,
+        };
+        let mut textures = Vec::new();
+        for (name, texture) in textured.into_inner() {
+            let Some(parameter) = textured_parameter(&mapped.material, &name, params, remap) else {
+                continue;
+            };
+            let texture = match name.as_str() {
+                "reflectance" | "transmittance" if scale != 1.0 => Texture::Scale(
+                    Box::new(texture),
+                    Box::new(Texture::Constant(Vec3::splat(scale))),
+                ),
+                _ => texture,
+            };
+            textures.push((parameter, texture));
         }
-        mapped.textures = (textured.into_inner().into_iter())
-            .filter_map(|(name, texture)| {
-                textured_parameter(&mapped.material, &name).map(|parameter| (parameter, texture))
-            })
-            .collect();
+        let (material, textures) = as_diffuse_if_lambert(mapped.material, textures);
+        let approximation = (mapped.approximation).or_else(|| match &material {
+            Material::Bsdf(model) => approximation(kind, model),
+            _ => None,
+        });
+        let mapped = Mapped {
+            material,
+            textures,
+            approximation,
+        };
         for ignored in ["bumpmap", "displacement", "normalmap"] {
             if params.at(ignored).is_some() {
                 self.warn(at, format!("material \"{kind}\": \"{ignored}\" is ignored"));
@@ -259,25 +303,98 @@ fn approximation(kind: &str, model: &crate::bsdf::Model) -> Option<String> {
 }
 
 /// A model that is one Lambert lobe and nothing else is a diffuse material (the same image,
-/// by the quicker path).
-fn as_material(model: crate::bsdf::Model) -> Material {
-    match crate::bsdf::Bsdf::new(&model).lambert_only() {
-        Some(albedo) => Material::Diffuse { albedo },
-        None => Material::Bsdf(model),
+/// by the quicker path), when its textures, if any, give that lobe's colour and nothing else.
+fn as_diffuse_if_lambert(
+    material: Material,
+    textures: Vec<(TexturedParameter, Texture)>,
+) -> (Material, Vec<(TexturedParameter, Texture)>) {
+    let Material::Bsdf(mut model) = material else {
+        return (material, textures);
+    };
+    let Some(albedo) = crate::bsdf::Bsdf::new(&model).lambert_only() else {
+        return (material, textures);
+    };
+    let diffuse = TexturedParameter::Model(ModelParameter::Diffuse);
+    // The textures set the model's diffuse colour, which must then be the lobe's whole albedo
+    // (not scaled by uber's opacity or translucent's `reflect`).
+    let only_diffuse_colour = textures.iter().all(|(p, _)| *p == diffuse)
+        && model.diffuse_mut().is_some_and(|kd| *kd == albedo);
+    if !textures.is_empty() && !only_diffuse_colour {
+        return (material, textures);
     }
+    let textures = (textures.into_iter())
+        .map(|(_, t)| (TexturedParameter::Albedo, t))
+        .collect();
+    (Material::Diffuse { albedo }, textures)
 }
 
-/// Which of `material`'s parameters the pbrt parameter `name` became.
-fn textured_parameter(material: &Material, name: &str) -> Option<TexturedParameter> {
+/// Which of `material`'s parameters the pbrt parameter `name` became, by explicit names only
+/// (a textured parameter dpm does not vary over a surface, matte's `sigma` say, keeps its
+/// typical value). A roughness carries `remap` and its axes: `uroughness` and `vroughness`
+/// take precedence over `roughness`.
+fn textured_parameter(
+    material: &Material,
+    name: &str,
+    params: &ParamList,
+    remap: Remap,
+) -> Option<TexturedParameter> {
+    use crate::bsdf::Model;
+    use ModelParameter as P;
     Some(match (material, name) {
-        (Material::Diffuse { .. }, _) => TexturedParameter::Albedo,
-        (Material::Mirror { .. }, _) => TexturedParameter::Tint,
+        (Material::Diffuse { .. }, "Kd" | "reflectance") => TexturedParameter::Albedo,
+        (Material::Mirror { .. }, "Kr" | "reflectance") => TexturedParameter::Tint,
         (Material::Glass { .. }, "Kr") => TexturedParameter::ReflectTint,
         (Material::Glass { .. }, "Kt") => TexturedParameter::TransmitTint,
-        (Material::Glass { .. }, _) => TexturedParameter::Ior,
-        (Material::Bsdf(_), "Kd" | "reflectance") => TexturedParameter::Albedo,
-        // Other textured parameters of a BSDF model take their typical value.
-        (Material::Bsdf(_), _) => return None,
+        (Material::Glass { .. }, "index" | "eta") => TexturedParameter::Ior,
+        (Material::Bsdf(model), name) => TexturedParameter::Model(match (model, name) {
+            (_, name) if name.ends_with("roughness") => roughness_parameter(name, params, remap)?,
+            (Model::Conductor { .. }, "eta") | (_, "conductor.eta") => P::ConductorEta,
+            (Model::Conductor { .. }, "k") | (_, "conductor.k") => P::ConductorK,
+            (Model::Conductor { .. }, "reflectance") | (_, "conductor.reflectance") => {
+                P::ConductorReflectance
+            }
+            (_, "Kd" | "reflectance") => P::Diffuse,
+            (_, "Ks") => P::Specular,
+            (_, "Kr") => P::Reflection,
+            (_, "Kt") => P::Transmission,
+            (_, "opacity") => P::Opacity,
+            (_, "reflect") => P::Reflect,
+            (_, "transmit" | "transmittance") => P::Transmit,
+            // uber reads `index` before `eta`.
+            (Model::Uber { .. }, "eta") if params.at("index").is_some() => return None,
+            (_, "index" | "eta" | "interface.eta") => P::Eta,
+            (_, "thickness") => P::Thickness,
+            _ => return None,
+        }),
+        _ => return None,
+    })
+}
+
+/// The roughness a parameter named `[interface.|conductor.][u|v]roughness` gives; `None` for
+/// an isotropic roughness both of whose axes are given on their own.
+fn roughness_parameter(name: &str, params: &ParamList, remap: Remap) -> Option<ModelParameter> {
+    let rest = name.strip_suffix("roughness")?;
+    let (prefix, axes) = match rest.strip_suffix('u') {
+        Some(prefix) => (prefix, Axes::U),
+        None => match rest.strip_suffix('v') {
+            Some(prefix) => (prefix, Axes::V),
+            None => (rest, Axes::Both),
+        },
+    };
+    if !matches!(prefix, "" | "interface." | "conductor.") {
+        return None;
+    }
+    let given = |axis: &str| params.at(&format!("{prefix}{axis}roughness")).is_some();
+    let axes = match (axes, given("u"), given("v")) {
+        (Axes::Both, true, true) => return None,
+        (Axes::Both, true, false) => Axes::V,
+        (Axes::Both, false, true) => Axes::U,
+        (axes, _, _) => axes,
+    };
+    Some(ModelParameter::Roughness {
+        axes,
+        remap,
+        conductor: prefix == "conductor.",
     })
 }
 

@@ -13,6 +13,7 @@ mod film;
 mod glossy;
 mod lights;
 mod materials;
+mod mix;
 mod shapes;
 mod tessellated;
 mod textures;
@@ -238,18 +239,34 @@ impl Mapper<'_> {
 
     /// The scene material of a shape's pbrt material, mapping it on first use.
     fn material_of(&mut self, which: Option<usize>, parsed: &Parsed) -> Result<u32, SceneError> {
+        self.material_within_mixes(which, parsed, 0)
+    }
+
+    /// [`Self::material_of`], `depth` mixes above it (a mix maps its two materials through
+    /// here).
+    fn material_within_mixes(
+        &mut self,
+        which: Option<usize>,
+        parsed: &Parsed,
+        depth: usize,
+    ) -> Result<u32, SceneError> {
         let key = which.unwrap_or(usize::MAX);
         if let Some(&i) = self.material_index.get(&key) {
             return Ok(i);
         }
-        let index = self.materials.len() as u32;
-        let material = match which {
-            None => Material::Diffuse {
-                albedo: Vec3::splat(0.5),
-            },
+        let (material, textures) = match which {
+            None => (
+                Material::Diffuse {
+                    albedo: Vec3::splat(0.5),
+                },
+                Vec::new(),
+            ),
             Some(i) => {
                 let (name, item) = &parsed.materials[i];
-                let mapped = self.material(&item.kind, &item.params, &item.at)?;
+                let mapped = match item.kind.as_str() {
+                    "mix" => self.mix(i, parsed, depth)?,
+                    kind => self.material(kind, &item.params, &item.at)?,
+                };
                 let label = name
                     .as_ref()
                     .map(|n| format!("material \"{n}\" ({})", item.kind))
@@ -270,15 +287,17 @@ impl Mapper<'_> {
                 }
                 crate::scene::check_material(&mapped.material)
                     .map_err(|why| item.at.error("Material", format!("{label}: {why}")))?;
-                if !mapped.textures.is_empty() {
-                    self.textured_materials.push(TexturedMaterial {
-                        material: index,
-                        textures: mapped.textures,
-                    });
-                }
-                mapped.material
+                (mapped.material, mapped.textures)
             }
         };
+        // Counted only now: a mix has just mapped its two materials.
+        let index = self.materials.len() as u32;
+        if !textures.is_empty() {
+            self.textured_materials.push(TexturedMaterial {
+                material: index,
+                textures,
+            });
+        }
         self.materials.push(material);
         self.material_index.insert(key, index);
         Ok(index)

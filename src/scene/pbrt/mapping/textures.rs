@@ -184,6 +184,24 @@ impl Mapper<'_> {
         .map(Texture::Constant))
     }
 
+    /// [`Self::parameter_if_given`] for a parameter that a colour or a float texture may give
+    /// (a float one in every channel): a conductor's η and k, pbrt-v3's mix amount.
+    pub(super) fn parameter_of_either_type(
+        &self,
+        params: &super::super::params::ParamList,
+        directive: &str,
+        name: &str,
+    ) -> Result<Option<Texture>, SceneError> {
+        let texture = params
+            .texture(name)
+            .map_err(|e| param_error(directive, e))?;
+        let ty = match texture.and_then(|t| self.textures.get(&t)) {
+            Some((TextureType::Float, _)) => TextureType::Float,
+            _ => TextureType::Colour,
+        };
+        self.parameter_if_given(params, directive, name, ty)
+    }
+
     fn image_texture(&mut self, ty: TextureType, item: &Item) -> Result<Texture, SceneError> {
         let p = |e| param_error("Texture", e);
         let params = &item.params;
