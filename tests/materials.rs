@@ -334,3 +334,32 @@ fn reading_a_rough_lobe_from_photons_or_following_it_renders_the_same_light() {
         "read from photons {read:.5}, followed {followed:.5}"
     );
 }
+
+/// A rough glass sphere in front of a large emitter: the light the camera sees through it
+/// arrives by transmission, which no shadow ray samples (they look to the side a ray came
+/// from), so a BSDF sample that finds the emitter through the glass counts in full. Weighed
+/// against shadow rays as a reflection would be, it would change with the shadow-ray count.
+#[test]
+fn light_through_rough_glass_does_not_depend_on_the_shadow_ray_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n\
+         Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 24\nWorldBegin\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+         \"point P\" [-3 -3 -2  3 -3 -2  3 3 -2  -3 3 -2]\nAttributeEnd\n\
+         Material \"glass\" \"float index\" 1.5 \"float roughness\" 0.3 \"bool remaproughness\" \"false\"\n\
+         Shape \"sphere\" \"float radius\" 0.8\n";
+    let mean = |samples: &str| {
+        let image = render(
+            dir.path(),
+            &format!("pane-{samples}.pbrt"),
+            text,
+            "7",
+            &["--light-samples", samples, "--spp", "4"],
+        );
+        image_mean(&image)
+    };
+    let (one, sixteen) = (mean("1"), mean("16"));
+    eprintln!("through rough glass: 1 shadow ray {one:.5}, 16 shadow rays {sixteen:.5}");
+    assert!((one / sixteen - 1.0).abs() < 0.01, "{one} vs {sixteen}");
+}

@@ -167,6 +167,15 @@ impl Integrator<'_> {
         if s.delta {
             return weight * self.trace(origin, next, depth + 1, along, sampler, scratch);
         }
+        // Shadow rays sample the side the ray came from only: light through a transmitting
+        // lobe is this sample's alone.
+        let mis = |light_pdf: f32, light: &crate::world::lights::LightSource| {
+            if s.transmission {
+                1.0
+            } else {
+                balance(s.pdf, self.samples_of(light) * light_pdf)
+            }
+        };
         let Some(found) = self.world.intersect(origin, next, 0.0, f32::INFINITY) else {
             let mut sky = Vec3::ZERO;
             if lit {
@@ -175,7 +184,7 @@ impl Integrator<'_> {
                     if radiance != Vec3::ZERO {
                         let light_pdf =
                             light.incident_pdf(at.p, at.ns, next, f32::INFINITY, Vec3::ZERO);
-                        sky += radiance * balance(s.pdf, self.samples_of(light) * light_pdf);
+                        sky += radiance * mis(light_pdf, light);
                     }
                 }
             }
@@ -192,7 +201,7 @@ impl Integrator<'_> {
             let emitted = light.emitted_radiance(-next.dot(found.geometric_normal));
             let light_pdf = light.incident_pdf(at.p, at.ns, next, found.t, found.geometric_normal);
             return Radiance {
-                direct: weight * emitted * balance(s.pdf, self.samples_of(light) * light_pdf),
+                direct: weight * emitted * mis(light_pdf, light),
                 ..Radiance::default()
             };
         }
