@@ -6,7 +6,7 @@
 //! measured peak.
 
 use super::pipeline::RenderError;
-use crate::estimate::settings::EstimatorKind;
+use crate::estimate::settings::{EstimatorKind, EstimatorSettings};
 use crate::photon::store::MapInfo;
 use crate::photon::tracer::MapKind;
 use crate::world::World;
@@ -18,22 +18,27 @@ pub const BYTES_PER_PHOTON: u64 = 20 + 16 + 48;
 /// Extra bytes a caustic photon costs with the diffusion estimate: its packed gradient (7) and
 /// the gradient pass's node sums and unpacked result while it runs.
 pub const GRADIENT_BYTES: u64 = 12;
+/// Bytes each photon of the tensor history costs: its record kept between passes (20) and its
+/// place in the map that shapes the kernels, gradient field included (90 at most, the bound of
+/// `PhotonMap::bytes_per_photon`'s test).
+pub const HISTORY_BYTES: u64 = 20 + 90;
 /// Bytes a pixel costs: the film's f64 sums (15 channels), one pass's f32 values, the resolved
 /// image, its checked copy and the encoded file in memory.
 pub const BYTES_PER_PIXEL: u64 = 240;
 /// What is assumed available when /proc/meminfo cannot be read.
 pub const FALLBACK_MEMORY: u64 = 16 << 30;
 
-/// Estimated peak memory of the photon maps and the image, in bytes (saturating). Loaded
-/// maps need no tracing records, so for them this is an overestimate.
-pub fn memory_estimate(wanted: &[MapInfo], diffusion: bool, width: u32, height: u32) -> u64 {
+/// Estimated peak memory of the photon maps and the image, in bytes (saturating): with the
+/// diffusion estimate, `history` earlier passes' caustic photons too. Loaded maps need no
+/// tracing records, so for them this is an overestimate.
+pub fn memory_estimate(wanted: &[MapInfo], diffusion: Option<u32>, width: u32, height: u32) -> u64 {
     let photons = wanted.iter().fold(0u64, |sum, info| {
-        let per = BYTES_PER_PHOTON
-            + if diffusion && info.kind == MapKind::Caustic {
-                GRADIENT_BYTES
-            } else {
-                0
-            };
+        let per = match (diffusion, info.kind) {
+            (Some(history), MapKind::Caustic) => {
+                BYTES_PER_PHOTON + GRADIENT_BYTES + u64::from(history) * HISTORY_BYTES
+            }
+            _ => BYTES_PER_PHOTON,
+        };
         sum.saturating_add(info.target.saturating_mul(per))
     });
     photons.saturating_add((width as u64 * height as u64).saturating_mul(BYTES_PER_PIXEL))
@@ -77,12 +82,13 @@ pub fn human_bytes(bytes: u64) -> String {
 /// Refuses, before anything is allocated, photon counts (and an image size) that would not
 /// fit in memory.
 pub(super) fn check_memory(
-    estimator: EstimatorKind,
+    estimator: &EstimatorSettings,
     world: &World,
     wanted: &[MapInfo],
 ) -> Result<(), RenderError> {
     let camera = &world.description.camera;
-    let diffusion = estimator == EstimatorKind::Diffusion;
+    let diffusion =
+        (estimator.estimator == EstimatorKind::Diffusion).then_some(estimator.tensor_history);
     let (width, height) = camera.image_size();
     let needed = memory_estimate(wanted, diffusion, width, height);
     let (available, source) = available_memory();
@@ -103,10 +109,12 @@ pub(super) fn check_memory(
         what.join(", "),
         human_bytes(needed),
         BYTES_PER_PHOTON,
-        if diffusion {
-            format!(", {} with a gradient", BYTES_PER_PHOTON + GRADIENT_BYTES)
-        } else {
-            String::new()
+        match diffusion {
+            Some(history) => format!(
+                ", {} a caustic photon with its gradient and --tensor-history {history}",
+                BYTES_PER_PHOTON + GRADIENT_BYTES + u64::from(history) * HISTORY_BYTES
+            ),
+            None => String::new(),
         },
         human_bytes(available),
     )))

@@ -96,7 +96,7 @@ impl Wiring {
         let settings = render_settings(args, world);
         super::caustic_guide::learn(world, &settings, args.seed, times);
         let wanted = wanted_maps(&settings, world);
-        check_memory(settings.estimator.estimator, world, &wanted)?;
+        check_memory(&settings.estimator, world, &wanted)?;
         // The kernel field needs the diffusion estimate and a caustic map to steer it.
         let kernel_field = settings.estimator.estimator == EstimatorKind::Diffusion
             && wanted.iter().any(|w| w.kind == MapKind::Caustic)
