@@ -15,9 +15,11 @@ use std::fmt;
 
 /// The RGB layers every film holds, in channel order.
 pub const RGB_LAYERS: [&str; 4] = ["image", "direct", "caustic", "indirect"];
-/// The kernel-field channels (diffusion estimate only): mean λ2, and the mean of the edge
-/// direction's doubled angle as a vector weighted by 1 − λ2 (an edge direction is modulo 180°).
-pub const KERNEL_CHANNELS: [&str; 3] = ["lambda2", "edge_cos2", "edge_sin2"];
+/// The kernel-field channels (diffusion estimate only): mean λ2, the mean of the edge
+/// direction's doubled angle as a vector weighted by 1 − λ2 (an edge direction is modulo 180°),
+/// and mean λ1: below 1 where the kernel shrank along the edge too (a crossing or a fold, with
+/// `--crossings shrink`), 1 where it kept its length.
+pub const KERNEL_CHANNELS: [&str; 4] = ["lambda2", "edge_cos2", "edge_sin2", "lambda1"];
 
 /// Everything that must agree for two films to be parts of one render.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -66,7 +68,12 @@ impl FilmHeader {
     }
 
     pub fn channels(&self) -> usize {
-        3 * RGB_LAYERS.len() + if self.kernel_field { 3 } else { 0 }
+        3 * RGB_LAYERS.len()
+            + if self.kernel_field {
+                KERNEL_CHANNELS.len()
+            } else {
+                0
+            }
     }
 }
 
@@ -345,6 +352,23 @@ impl Film {
         self.header
             .kernel_field
             .then(|| self.mean_rgb(3 * RGB_LAYERS.len(), &ImageResponse::default()))
+    }
+
+    /// Kernel-field channel `name` of [`KERNEL_CHANNELS`] (the mean over passes, row-major),
+    /// when the film has the kernel field.
+    pub fn kernel_channel(&self, name: &str) -> Option<Vec<f32>> {
+        let i = KERNEL_CHANNELS.iter().position(|k| *k == name)?;
+        if !self.header.kernel_field {
+            return None;
+        }
+        let (first, c) = (3 * RGB_LAYERS.len() + i, self.header.channels());
+        let inv = 1.0 / self.passes.count().max(1) as f64;
+        Some(
+            self.sums
+                .chunks_exact(c)
+                .map(|px| (px[first] * inv) as f32)
+                .collect(),
+        )
     }
 
     /// The kernel field as a picture (hue: edge direction, brightness: 1 − λ2), when present.

@@ -38,11 +38,11 @@ pub fn write_film_image(path: &Path, film: &Film, exposure: f32) -> Result<(), I
         };
         push_rgb(&prefix, &image);
     }
-    if let Some(kernel) = film.kernel_channels() {
-        for (c, name) in KERNEL_CHANNELS.iter().enumerate() {
+    for name in KERNEL_CHANNELS {
+        if let Some(samples) = film.kernel_channel(name) {
             channels.push(ExrChannel {
                 name: format!("kernel.{name}"),
-                samples: kernel.pixels.iter().map(|p| p.to_array()[c]).collect(),
+                samples,
             });
         }
     }

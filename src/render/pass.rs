@@ -421,10 +421,10 @@ pub struct KernelProbe<'a> {
 }
 
 impl KernelProbe<'_> {
-    /// (λ2, (1 − λ2) cos 2θ, (1 − λ2) sin 2θ) with θ the edge direction's angle in the
-    /// surface's tangent frame; a round kernel (1, 0, 0) where nothing diffuse is hit.
-    pub fn channels(&self, origin: Vec3, dir: Vec3, scratch: &mut Scratch) -> [f32; 3] {
-        const ROUND: [f32; 3] = [1.0, 0.0, 0.0];
+    /// (λ2, (1 − λ2) cos 2θ, (1 − λ2) sin 2θ, λ1) with θ the edge direction's angle in the
+    /// surface's tangent frame; a round kernel (1, 0, 0, 1) where nothing diffuse is hit.
+    pub fn channels(&self, origin: Vec3, dir: Vec3, scratch: &mut Scratch) -> [f32; 4] {
+        const ROUND: [f32; 4] = [1.0, 0.0, 0.0, 1.0];
         let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
             return ROUND;
         };
@@ -447,6 +447,7 @@ impl KernelProbe<'_> {
             shape.lambda2,
             w * (2.0 * theta).cos(),
             w * (2.0 * theta).sin(),
+            shape.lambda1,
         ]
     }
 }
@@ -538,7 +539,7 @@ pub fn shade_pass(
                 }
                 if let Some(p) = probe {
                     let ray = camera.chief_ray(fx + 0.5, fy + 0.5);
-                    px[12..15].copy_from_slice(&p.channels(ray.origin, ray.direction, scratch));
+                    px[12..16].copy_from_slice(&p.channels(ray.origin, ray.direction, scratch));
                 }
             }
             progress.inc(1);

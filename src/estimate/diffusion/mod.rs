@@ -304,9 +304,10 @@ impl DiffusionEstimate {
             1.0
         } else {
             let f = p.min_kernel_photons / inside;
-            (f * f).clamp(p.lambda2_floor, 1.0)
+            (f * f).min(1.0)
         };
-        let lambda2 = diffusivity(contrast, p.diffusivity, p.alpha).max(fewest);
+        let lambda2 =
+            diffusivity(contrast, p.diffusivity, p.alpha).max(fewest.max(p.lambda2_floor));
         let lambda1 = match p.crossings {
             Crossings::Keep => 1.0,
             Crossings::Shrink => {
