@@ -5,7 +5,7 @@ reference's (BENCHMARKS.md, "Caustic-glass against pbrt" and "Materials against 
 
     scripts/equal-time.py PBRT DPM SCENE.pbrt REFERENCE.exr OUT_DIR
         [--sppm R:N,R:N,...] [--photons N] [--dpm-times S,S,...] [--maxdepth D]
-        [--region caustic|none] [--block B] [-- DPM_FLAGS...]
+        [--region caustic|none] [--region-from IMAGE.exr] [--block B] [-- DPM_FLAGS...]
 
 PBRT is a pbrt-v3 binary (built by the reader from pbrt's public source; nothing here builds
 it), DPM a dpm binary. The scene's Film line sets the size; both renderers render it as written
@@ -16,8 +16,9 @@ with `--time S` for each S of --dpm-times (and DPM_FLAGS), its time the wall clo
 The error is the relative MSE of examples/image_error.rs (the mean over pixels of
 (e - r)^2/(r^2 + eps^2) of the RGB means, eps = 10% of the reference's mean). The region
 "caustic" is the set of pixels where the caustic layer of dpm's longest run carries at least a
-quarter of the pixel (its image mean); its error is the same sum over those pixels only, with
-the same eps. Blocks the reference leaves darker than 1% of its mean are left out of the
+quarter of the pixel (its image mean), or of IMAGE.exr's (--region-from: to compare dpm's
+settings over one region); its error is the same sum over those pixels only, with the same eps.
+`--sppm none` renders dpm alone. Blocks the reference leaves darker than 1% of its mean are left out of the
 block range. Needs numpy and OpenEXR (pip install numpy OpenEXR). Run it with nothing else on
 the machine: the figures are wall-clock times.
 """
@@ -73,7 +74,9 @@ def main():
     if "--" in args:
         i = args.index("--")
         args, dpm_flags = args[:i], args[i + 1 :]
-    sppm = [(float(a), int(b)) for a, b in (s.split(":") for s in arg(args, "--sppm", "0.075:40").split(","))]
+    sppm_arg = arg(args, "--sppm", "0.075:40")
+    sppm = [] if sppm_arg == "none" else [(float(a), int(b)) for a, b in (s.split(":") for s in sppm_arg.split(","))]
+    region_from = arg(args, "--region-from", None)
     photons = int(arg(args, "--photons", "175000"))
     dpm_times = [float(t) for t in arg(args, "--dpm-times", "10,30,100").split(",")]
     maxdepth = int(arg(args, "--maxdepth", "16"))
@@ -86,7 +89,7 @@ def main():
     runs = []
 
     for t in dpm_times:
-        image = out / f"dpm-{t:g}.exr"
+        image = out / f"dpm-{t:g}{'-' + '_'.join(f.strip('-') for f in dpm_flags) if dpm_flags else ''}.exr"
         start = time.monotonic()
         subprocess.run([dpm, "render", str(scene), "-o", str(image), "--time", str(t)] + dpm_flags,
                        check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -110,8 +113,8 @@ def main():
 
     region = None
     if region_name == "caustic":
-        longest = max((r for r in runs if r["renderer"] == "dpm"), key=lambda r: r["seconds"])
-        caustic, whole = read(longest["image"], "caustic."), read(longest["image"])
+        source = region_from or max((r for r in runs if r["renderer"] == "dpm"), key=lambda r: r["seconds"])["image"]
+        caustic, whole = read(source, "caustic."), read(source)
         region = caustic >= 0.25 * np.maximum(whole, 1e-30)
         print(f"caustic region: {region.mean():.3%} of the pixels", flush=True)
     print("\n| renderer | setting | seconds | relative MSE | relative MSE, "

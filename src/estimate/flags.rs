@@ -129,9 +129,9 @@ pub struct EstimatorFlags {
 
     /// Fewest photons the diffusion kernel should hold (0: no bound).
     ///
-    /// The ellipse holds about N·√λ2 of the N photons in its disc, so λ2 is kept at least
-    /// (m/N)²: a kernel squeezed onto a few photons is shaped by their own noise, a bias that
-    /// averaging passes does not remove. Where discs hold few photons (a progressive
+    /// The ellipse holds about N·√(λ1 λ2) of the N photons in its disc, so λ1 λ2 is kept at
+    /// least (m/N)²: a kernel squeezed onto a few photons is shaped by their own noise, a bias
+    /// that averaging passes does not remove. Where discs hold few photons (a progressive
     /// render's late passes, dim regions) the kernel turns round, and the estimate stays
     /// consistent. 8 lowered every error of progressive diffusion at the default radius on
     /// the constructed distribution (BENCHMARKS.md); 16 and 32 blurred edges in late passes.
