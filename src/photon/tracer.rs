@@ -214,7 +214,19 @@ pub fn trace_map(
     seed: u64,
     progress: &ProgressBar,
 ) -> (PhotonMap, TraceCounts) {
-    let traced = trace_photons(world, kind, target, seed, progress);
+    trace_map_within(world, kind, target, None, seed, progress)
+}
+
+/// [`trace_map`] emitting at most `max_paths` paths when given (the map is left short).
+pub fn trace_map_within(
+    world: &World,
+    kind: MapKind,
+    target: usize,
+    max_paths: Option<u64>,
+    seed: u64,
+    progress: &ProgressBar,
+) -> (PhotonMap, TraceCounts) {
+    let traced = trace_photons_within(world, kind, target, max_paths, seed, progress);
     if traced.interrupted {
         // Not worth building: the caller discards it.
         return (PhotonMap::default(), traced.counts);
@@ -332,12 +344,26 @@ pub fn trace_photons(
     seed: u64,
     progress: &ProgressBar,
 ) -> TracedPhotons {
+    trace_photons_within(world, kind, target, None, seed, progress)
+}
+
+/// [`trace_photons`] emitting at most `max_paths` paths when given.
+pub fn trace_photons_within(
+    world: &World,
+    kind: MapKind,
+    target: usize,
+    max_paths: Option<u64>,
+    seed: u64,
+    progress: &ProgressBar,
+) -> TracedPhotons {
     // Under an open sky most paths leave the scene and store nothing: past this many paths a
     // wanted photon the map stays short, still right (flux is over the paths emitted), rather
     // than the pass spending minutes on escaping rays.
-    let max_paths = (target as u64)
-        .saturating_mul(MAX_PATHS_PER_PHOTON)
-        .max(1_000_000);
+    let max_paths = max_paths.unwrap_or_else(|| {
+        (target as u64)
+            .saturating_mul(MAX_PATHS_PER_PHOTON)
+            .max(1_000_000)
+    });
     let Some(emitter) = Emitter::new(world, kind, seed) else {
         return TracedPhotons::new(Vec::new(), TraceCounts::default(), 0);
     };

@@ -137,6 +137,18 @@ pub struct RenderArgs {
           help_heading = headings::PHOTONS)]
     pub global_photons: Option<usize>,
 
+    /// Paths a pass may emit for its global map (0: until --global-photons are stored, at
+    /// most 64 paths a photon and at least 1000000).
+    ///
+    /// Default: 100000 where the global map serves one diffuse object lit through its mirrors
+    /// and glass and --global-photons is not given (most of such a map's paths store nothing:
+    /// light that leaves an open floor leaves the scene, so filling 10000 photons took a
+    /// million paths, a third of a pass), else 0. The map's flux is over the paths emitted,
+    /// so a short map is right, only noisier.
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          help_heading = headings::PHOTONS, hide_short_help = true)]
+    pub global_paths: Option<u64>,
+
     /// Pilot caustic paths traced once per render to aim the caustic photons (0: off).
     ///
     /// At most 128 per cell of the lights' cones, 64 cells a cone: they learn where each
@@ -348,6 +360,8 @@ pub const DEFAULT_GLOBAL_PHOTONS: usize = 300_000;
 /// Stored global photons per pass by default in a scene whose one diffuse object sees itself
 /// through mirrors and glass alone (BENCHMARKS.md, "caustic-glass against pbrt-v3").
 pub const DEFAULT_LONE_GLOBAL_PHOTONS: usize = 10_000;
+/// Paths a pass emits for that lone object's global map at most, by default.
+pub const DEFAULT_LONE_GLOBAL_PATHS: u64 = 100_000;
 /// Shadow rays per area light at each diffuse eye hit by default (docs/guide.md,
 /// "Choosing settings").
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 4;

@@ -33,7 +33,7 @@ use crate::estimate::{
     ResolvedEstimator, Scratch,
 };
 use crate::photon::PhotonMap;
-use crate::photon::tracer::{MapKind, TraceCounts, trace_map};
+use crate::photon::tracer::{MapKind, TraceCounts, trace_map_within};
 use crate::sampling::PathSampler;
 use crate::timing::{PhaseTimes, progress};
 use crate::world::{Surface, World};
@@ -50,6 +50,10 @@ pub struct RenderSettings {
     pub caustic_photons: usize,
     /// Photons stored in each pass's global map (0: no global map).
     pub global_photons: usize,
+    /// Paths each pass may emit for its global map (0: the tracer's own limit). Left out of
+    /// the file when 0, so films that had no such limit keep their bytes.
+    #[serde(default, skip_serializing_if = "no_path_limit")]
+    pub global_paths: u64,
     /// Camera samples per pixel in each pass.
     pub spp: u32,
     pub max_depth: u32,
@@ -86,6 +90,10 @@ pub struct RenderSettings {
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
     pub estimator: EstimatorSettings,
+}
+
+fn no_path_limit(paths: &u64) -> bool {
+    *paths == 0
 }
 
 /// Films written before `glass-split-depth` existed split at every glass hit.
@@ -195,7 +203,18 @@ pub fn trace_pass_maps(
         };
         let bar = progress(info.target, what);
         let start = Instant::now();
-        let (map, counts) = trace_map(world, info.kind, info.target as usize, seed, &bar);
+        let max_paths = match info.kind {
+            MapKind::Global { .. } if settings.global_paths > 0 => Some(settings.global_paths),
+            _ => None,
+        };
+        let (map, counts) = trace_map_within(
+            world,
+            info.kind,
+            info.target as usize,
+            max_paths,
+            seed,
+            &bar,
+        );
         bar.finish_and_clear();
         times.accumulate(
             &format!("trace {what}"),

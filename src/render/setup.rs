@@ -6,7 +6,8 @@
 //! needs for its radii.
 
 use super::args::{
-    DEFAULT_GLOBAL_PHOTONS, DEFAULT_LONE_GLOBAL_PHOTONS, DEFAULT_RADIUS_K, RenderArgs,
+    DEFAULT_GLOBAL_PHOTONS, DEFAULT_LONE_GLOBAL_PATHS, DEFAULT_LONE_GLOBAL_PHOTONS,
+    DEFAULT_RADIUS_K, RenderArgs,
 };
 use super::camera::RayCamera;
 use super::film::{Film, FilmHeader};
@@ -190,15 +191,20 @@ pub struct Start {
 /// The settings every pass of this render uses.
 fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let diffuse_objects = world.diffuse_objects();
+    let lone = diffuse_objects == 1 && world.has_specular();
     RenderSettings {
         caustic_photons: args.caustic_photons,
         // Diffuse light bounces between two diffuse objects, or from one back to itself
         // through its mirrors and glass; a lone plane cannot light itself.
         global_photons: args.global_photons.unwrap_or(match diffuse_objects {
             0 => 0,
-            1 if world.has_specular() => DEFAULT_LONE_GLOBAL_PHOTONS,
+            1 if lone => DEFAULT_LONE_GLOBAL_PHOTONS,
             1 => 0,
             _ => DEFAULT_GLOBAL_PHOTONS,
+        }),
+        global_paths: args.global_paths.unwrap_or(match args.global_photons {
+            None if lone => DEFAULT_LONE_GLOBAL_PATHS,
+            _ => 0,
         }),
         spp: args.spp,
         max_depth: args.max_depth,
