@@ -174,8 +174,11 @@ pub struct EstimatorFlags {
     /// The structure tensor, and so each kernel's direction and squeeze, is taken on the
     /// photons of the N passes before (traced again where a run starts past pass 0, so a pass
     /// is the same wherever it runs), at the pass's own radii; the density is still the
-    /// pass's own photons. The shape is then independent of the photons it spreads, and drawn
-    /// from N times as many, so it stays sharp as the radii shrink.
+    /// pass's own photons. The shape is then independent of the photons it spreads (a kernel
+    /// shaped by its own photons loses 0.3–0.6% of a caustic's energy), and drawn from N times
+    /// as many, so it stays sharp as the radii shrink; it costs the gradient pass on N + 1
+    /// passes' photons and 110 bytes a kept photon. Worth it where a caustic's mean matters
+    /// more than time.
     #[arg(long, value_name = "N", default_value_t = super::settings::DEFAULT_TENSOR_HISTORY,
           help_heading = headings::KERNEL, hide_short_help = true)]
     pub tensor_history: u32,

@@ -37,11 +37,12 @@ impl EstimatorKind {
     }
 }
 
-/// Earlier passes whose photons shape a pass's diffusion kernels by default: 4 lowered the
-/// constructed distribution's edge error after 16 passes to 0.85× its own shaping's and its
-/// energy error from 0.56% to 0.12%, and caustic-glass's caustic kept 0.4% more of its energy;
-/// 8 added little to either for twice the gradient pass (BENCHMARKS.md).
-pub const DEFAULT_TENSOR_HISTORY: u32 = 4;
+/// Earlier passes whose photons shape a pass's diffusion kernels by default: none. 4 lowered
+/// the constructed distribution's edge error after 16 passes to 0.84× and its energy error from
+/// 0.56% to 0.11%, and caustic-glass's image mean came 0.25% nearer pbrt's, but the gradient
+/// pass on five passes' photons cost the torus knot and the metal ring more time than the
+/// sharper shape saved (their time to a given error 1.2–1.5×; BENCHMARKS.md).
+pub const DEFAULT_TENSOR_HISTORY: u32 = 0;
 
 /// `k` of the paper's baseline, the cone filter with 400 photons an estimate.
 pub const PAPER_K: usize = 400;
