@@ -177,8 +177,8 @@ pub struct EstimatorFlags {
     /// pass's own photons. The shape is then independent of the photons it spreads (a kernel
     /// shaped by its own photons loses 0.3–0.6% of a caustic's energy), and drawn from N times
     /// as many, so it stays sharp as the radii shrink; it costs the gradient pass on N + 1
-    /// passes' photons and 110 bytes a kept photon. Worth it where a caustic's mean matters
-    /// more than time.
+    /// passes' photons and 110 bytes a kept photon. 0 is faster where a caustic's last
+    /// fraction of a percent does not matter.
     #[arg(long, value_name = "N", default_value_t = super::settings::DEFAULT_TENSOR_HISTORY,
           help_heading = headings::KERNEL, hide_short_help = true)]
     pub tensor_history: u32,
