@@ -105,7 +105,14 @@ fn pool(threads: usize) -> rayon::ThreadPool {
 }
 
 fn trace(world: &World, case: &Case) -> TracedPhotons {
-    trace_photons(world, case.kind, case.target, SEED, &ProgressBar::hidden())
+    trace_photons(
+        world,
+        case.kind,
+        case.target,
+        None,
+        SEED,
+        &ProgressBar::hidden(),
+    )
 }
 
 /// One case: what the tracer stores and casts (measured once, untimed), and the seconds of

@@ -309,7 +309,7 @@ fn maps_are_identical_on_one_and_two_threads() {
 fn the_traced_map_is_the_map_of_the_traced_photons() {
     let world = world(&cornell_point_light(8, 8));
     for kind in [MapKind::Caustic, GLOBAL_ALL] {
-        let traced = trace_photons(&world, kind, 30_000, 4, &ProgressBar::hidden());
+        let traced = trace_photons(&world, kind, 30_000, None, 4, &ProgressBar::hidden());
         assert_eq!(traced.len(), 30_000);
         let photons = traced.photons();
         let emitted = traced.counts.emitted;

@@ -368,12 +368,12 @@ struct DensityCli {
 /// (measured: 0.274, 0.224, 0.192 at 1, 4, 16 passes, the kernels shaped by the four passes
 /// before each), and the flat-region noise falls too: the estimate stays consistent with its
 /// kernels' shapes taken from earlier passes.
-#[test]
-fn progressive_density_converges_on_the_constructed_distribution() {
+/// 16 passes of 100,000 photons of the constructed distribution at 128², with `extra` flags.
+fn constructed_16_passes(extra: &[&str]) -> dpm::density::DensityReport {
     use clap::Parser;
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("d.pfm");
-    let argv = [
+    let mut argv = vec![
         "dpm",
         "--distribution",
         "constructed",
@@ -383,15 +383,18 @@ fn progressive_density_converges_on_the_constructed_distribution() {
         "128",
         "--height",
         "128",
-        "--estimator",
-        "diffusion",
         "--passes",
         "16",
         "-o",
         path_str(&out),
     ];
-    let args = DensityCli::parse_from(argv).args;
-    let report = dpm::density::run(&args).expect("density");
+    argv.extend_from_slice(extra);
+    dpm::density::run(&DensityCli::parse_from(argv).args).expect("density")
+}
+
+#[test]
+fn progressive_density_converges_on_the_constructed_distribution() {
+    let report = constructed_16_passes(&["--estimator", "diffusion"]);
     let at = |n: u64| {
         report
             .progression
@@ -429,29 +432,8 @@ fn progressive_density_converges_on_the_constructed_distribution() {
 /// against 0.399–0.405 on seeds 1, 2 and 3), energy within 1% either way.
 #[test]
 fn a_tensor_history_sharpens_the_edges_of_a_progressive_estimate() {
-    use clap::Parser;
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("d.pfm");
     let run = |history: &str| {
-        let argv = [
-            "dpm",
-            "--distribution",
-            "constructed",
-            "--count",
-            "100000",
-            "--width",
-            "128",
-            "--height",
-            "128",
-            "--passes",
-            "16",
-            "--tensor-history",
-            history,
-            "-o",
-            path_str(&out),
-        ];
-        let report = dpm::density::run(&DensityCli::parse_from(argv).args).expect("density");
-        report.metrics.expect("a known density")
+        (constructed_16_passes(&["--tensor-history", history]).metrics).expect("a known density")
     };
     let (own, history) = (run("0"), run("4"));
     eprintln!(

@@ -226,7 +226,7 @@ pub fn trace_map_within(
     seed: u64,
     progress: &ProgressBar,
 ) -> (PhotonMap, TraceCounts) {
-    let traced = trace_photons_within(world, kind, target, max_paths, seed, progress);
+    let traced = trace_photons(world, kind, target, max_paths, seed, progress);
     if traced.interrupted {
         // Not worth building: the caller discards it.
         return (PhotonMap::default(), traced.counts);
@@ -332,23 +332,13 @@ pub const MAX_PATHS_PER_PHOTON: u64 = 64;
 /// limit would find as few.
 pub const EMPTY_AFTER_PATHS: u64 = 1 << 20;
 
-/// The tracing half of [`trace_map`], kept apart so that it can be timed on its own.
+/// The tracing half of [`trace_map_within`], kept apart so that it can be timed on its own;
+/// with `max_paths`, at most that many paths are emitted (the map is left short).
 ///
 /// Paths run in batches sized to finish the pass; a batch is split into chunks of consecutive
 /// paths, one rayon task each, whose photons are kept in chunk order: the same photons in the
 /// same order whatever the thread count.
 pub fn trace_photons(
-    world: &World,
-    kind: MapKind,
-    target: usize,
-    seed: u64,
-    progress: &ProgressBar,
-) -> TracedPhotons {
-    trace_photons_within(world, kind, target, None, seed, progress)
-}
-
-/// [`trace_photons`] emitting at most `max_paths` paths when given.
-pub fn trace_photons_within(
     world: &World,
     kind: MapKind,
     target: usize,

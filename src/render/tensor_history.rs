@@ -1,6 +1,6 @@
 //! The tensor history of a progressive render: the caustic photons of the passes before the
 //! one running, up to `--tensor-history` of them, from which that pass's diffusion kernels take
-//! their shapes (`estimate::diffusion::splat::ShapedBy`). A pass's photons depend only on the
+//! their shapes (`estimate::diffusion::shaped::ShapedBy`). A pass's photons depend only on the
 //! seed and its index, so a run that starts past pass 0 (a resumed film, a range rendered
 //! apart) traces the passes before it again and renders the same pass as one run would. Owns
 //! which passes are kept and the map they make; must not shade.
