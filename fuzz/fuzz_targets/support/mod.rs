@@ -37,12 +37,14 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
     hay.windows(needle.len()).position(|w| w == needle)
 }
 
-/// A scene that loaded: every number finite, every index in range, every light emitting.
+/// A scene that loaded: every number finite, every index in range, every light emitting,
+/// something to see (world shapes or instances of prototypes that have shapes).
 pub fn check_scene(scene: &SceneDescription) {
     let c = &scene.camera;
     assert!(c.position.is_finite() && c.look_at.is_finite() && c.up.is_finite());
     assert!(c.fov_y_degrees().is_none_or(|f| f > 0.0 && f < 180.0) && c.width > 0 && c.height > 0);
-    assert!(!scene.lights.is_empty() && !scene.shapes.is_empty());
+    assert!(!scene.lights.is_empty());
+    assert!(!scene.shapes.is_empty() || !scene.instances.is_empty());
     for light in &scene.lights {
         assert!(check_light(light).is_ok(), "{light:?}");
     }
@@ -50,20 +52,35 @@ pub fn check_scene(scene: &SceneDescription) {
         assert!(check_material(m).is_ok(), "{m:?}");
     }
     for shape in &scene.shapes {
-        match shape {
-            Shape::Sphere { center, radius, material } => {
-                assert!(center.is_finite() && radius.is_finite() && *radius > 0.0);
-                assert!((*material as usize) < scene.materials.len());
-            }
-            Shape::Triangles(mesh) => {
-                assert!((mesh.material as usize) < scene.materials.len());
-                assert!(!mesh.triangles.is_empty());
-                assert!(check_mesh(mesh).is_ok());
-            }
-            Shape::Curves(curves) => {
-                assert!((curves.material as usize) < scene.materials.len());
-                assert!(dpm::scene::check_curves(curves).is_ok());
-            }
+        check_shape(shape, scene.materials.len());
+    }
+    for prototype in &scene.prototypes {
+        for shape in &prototype.shapes {
+            check_shape(shape, scene.materials.len());
+        }
+    }
+    for instance in &scene.instances {
+        let prototype = &scene.prototypes[instance.prototype as usize];
+        assert!(!prototype.shapes.is_empty());
+        let m = instance.object_to_world;
+        assert!(m.is_finite() && m.determinant().is_normal());
+    }
+}
+
+fn check_shape(shape: &Shape, materials: usize) {
+    match shape {
+        Shape::Sphere { center, radius, material } => {
+            assert!(center.is_finite() && radius.is_finite() && *radius > 0.0);
+            assert!((*material as usize) < materials);
+        }
+        Shape::Triangles(mesh) => {
+            assert!((mesh.material as usize) < materials);
+            assert!(!mesh.triangles.is_empty());
+            assert!(check_mesh(mesh).is_ok());
+        }
+        Shape::Curves(curves) => {
+            assert!((curves.material as usize) < materials);
+            assert!(dpm::scene::check_curves(curves).is_ok());
         }
     }
 }
