@@ -32,7 +32,11 @@ fuzz_target!(|data: &[u8]| {
             };
             if texture.check_finite().is_ok() {
                 for wrap in [Wrap::Repeat, Wrap::Black, Wrap::Clamp] {
-                    for st in [Vec2::new(0.3, 0.7), Vec2::new(-1.5, 2.25), Vec2::splat(1e30)] {
+                    for st in [
+                        Vec2::new(0.3, 0.7),
+                        Vec2::new(-1.5, 2.25),
+                        Vec2::splat(1e30),
+                    ] {
                         assert!(texture.bilinear(st, wrap).is_finite(), "{st} {wrap:?}");
                     }
                 }

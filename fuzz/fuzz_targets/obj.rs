@@ -14,7 +14,11 @@ const SCENE: &str = include_str!("../../tests/fixtures/one-mesh.toml");
 fuzz_target!(|data: &[u8]| {
     let mut files = support::files(data, "mesh.obj");
     files.insert(support::scene_path("scene.toml"), SCENE);
-    match load_from(&support::scene_path("scene.toml"), &files, &LoadOptions::default()) {
+    match load_from(
+        &support::scene_path("scene.toml"),
+        &files,
+        &LoadOptions::default(),
+    ) {
         Ok((scene, _report)) => support::check_scene(&scene),
         Err(e) => support::check_error(&e),
     }

@@ -11,7 +11,11 @@ use libfuzzer_sys::fuzz_target;
 fuzz_target!(|data: &[u8]| {
     let files = support::files(data, "scene.pbrt");
     let strict = data.first().is_some_and(|b| b & 1 == 1);
-    match load_from(&support::scene_path("scene.pbrt"), &files, &LoadOptions { strict }) {
+    match load_from(
+        &support::scene_path("scene.pbrt"),
+        &files,
+        &LoadOptions { strict },
+    ) {
         Ok((scene, _report)) => support::check_scene(&scene),
         Err(e) => support::check_error(&e),
     }

@@ -15,7 +15,12 @@ fuzz_target!(|data: &[u8]| {
     match dpm::photon::store::read(&path) {
         Ok(file) => {
             for stored in &file.maps {
-                assert!(stored.map.photons().all(|p| p.position().is_finite() && p.power().is_finite()));
+                assert!(
+                    stored
+                        .map
+                        .photons()
+                        .all(|p| p.position().is_finite() && p.power().is_finite())
+                );
             }
         }
         Err(e) => assert!(e.to_string().contains(path.to_str().unwrap()), "{e}"),

@@ -11,7 +11,11 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let files = support::files(data, "scene.toml");
-    match load_from(&support::scene_path("scene.toml"), &files, &LoadOptions::default()) {
+    match load_from(
+        &support::scene_path("scene.toml"),
+        &files,
+        &LoadOptions::default(),
+    ) {
         Ok((scene, _report)) => support::check_scene(&scene),
         Err(e) => support::check_error(&e),
     }

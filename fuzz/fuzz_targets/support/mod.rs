@@ -21,7 +21,9 @@ pub fn files(data: &[u8], first: &str) -> InMemory {
             .iter()
             .position(|&b| b == b'\n')
             .map_or(data.len(), |j| name_start + j);
-        name = String::from_utf8_lossy(&data[name_start..name_end]).trim().to_string();
+        name = String::from_utf8_lossy(&data[name_start..name_end])
+            .trim()
+            .to_string();
         start = (name_end + 1).min(data.len());
         at = start;
     }
@@ -69,7 +71,11 @@ pub fn check_scene(scene: &SceneDescription) {
 
 fn check_shape(shape: &Shape, materials: usize) {
     match shape {
-        Shape::Sphere { center, radius, material } => {
+        Shape::Sphere {
+            center,
+            radius,
+            material,
+        } => {
             assert!(center.is_finite() && radius.is_finite() && *radius > 0.0);
             assert!((*material as usize) < materials);
         }
