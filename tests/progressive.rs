@@ -427,21 +427,30 @@ fn progressive_density_converges_on_the_constructed_distribution() {
     assert_eq!(report.metrics.as_ref().unwrap().rmse, sixteen.rmse);
 }
 
-/// Kernels shaped by the four passes before against kernels shaped by each
-/// pass's own photons, same photons: 7% less error in the edge band after 16 passes (0.373
-/// against 0.399–0.405 on seeds 1, 2 and 3), energy within 1% either way.
+/// Kernels shaped by the four passes before against kernels shaped by each pass's own
+/// photons, same photons: in the edge band after 16 passes, every photon of the four passes
+/// (`--history-photons all`) 0.364 against 0.397–0.403 on seeds 1, 2 and 3, one pass's worth
+/// of them (the default) 0.387–0.390; energy within 1% every way.
 #[test]
 fn a_tensor_history_sharpens_the_edges_of_a_progressive_estimate() {
-    let run = |history: &str| {
-        (constructed_16_passes(&["--tensor-history", history]).metrics).expect("a known density")
-    };
-    let (own, history) = (run("0"), run("4"));
+    let run = |flags: &[&str]| (constructed_16_passes(flags).metrics).expect("a known density");
+    let own = run(&["--tensor-history", "0"]);
+    let one_pass = run(&["--tensor-history", "4"]);
+    let all = run(&["--tensor-history", "4", "--history-photons", "all"]);
     eprintln!(
-        "edge band: own {:.4}, history {:.4}; energy {:+.4} {:+.4}",
-        own.edge_band_rmse, history.edge_band_rmse, own.energy_error, history.energy_error
+        "edge band: own {:.4}, one pass {:.4}, all {:.4}; energy {:+.4} {:+.4} {:+.4}",
+        own.edge_band_rmse,
+        one_pass.edge_band_rmse,
+        all.edge_band_rmse,
+        own.energy_error,
+        one_pass.energy_error,
+        all.energy_error
     );
-    assert!(history.edge_band_rmse < 0.96 * own.edge_band_rmse);
-    assert!(history.energy_error.abs() < 0.01 && own.energy_error.abs() < 0.01);
+    assert!(all.edge_band_rmse < 0.96 * own.edge_band_rmse);
+    assert!(one_pass.edge_band_rmse < own.edge_band_rmse);
+    for m in [&own, &one_pass, &all] {
+        assert!(m.energy_error.abs() < 0.01, "{}", m.energy_error);
+    }
 }
 
 /// The dimensionless K needs no retuning as the schedule shrinks the radii: on a step edge

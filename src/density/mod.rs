@@ -303,14 +303,15 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     let mut distribution = None;
     let mut truth = None;
     // The photons of the passes before, newest last, that shape a pass's kernels.
-    let mut history: std::collections::VecDeque<Vec<crate::photon::Photon>> = Default::default();
+    let mut history: std::collections::VecDeque<(u64, Vec<crate::photon::Photon>)> =
+        Default::default();
     for pass in 0..args.passes {
         // Only the last pass's map is kept (for the kernel field): free the previous one first.
         drop(last_map.take());
         let start = Instant::now();
         let source = load_photons_with_seed(args, schedule.seed(pass))?;
         if settings.tensor_history > 0 {
-            history.push_back(source.photons.clone());
+            history.push_back((pass, source.photons.clone()));
         }
         photon_count = source.photons.len();
         source_name = source.name;
@@ -336,20 +337,15 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
         // The passes before this one, when it has any, shape its kernels.
         let analysis = match resolved {
             ResolvedEstimator::Diffusion(d) if history.len() > 1 => {
-                let earlier = history.len() - 1;
-                let scale = 1.0 / earlier as f32;
-                let photons: Vec<crate::photon::Photon> = (history.iter().take(earlier))
-                    .flatten()
-                    .map(|p| {
-                        crate::photon::Photon::new(
-                            p.position(),
-                            p.power() * scale,
-                            p.direction(),
-                            p.normal(),
-                        )
-                    })
+                let earlier: Vec<(u64, &[crate::photon::Photon])> = (history.iter())
+                    .take(history.len() - 1)
+                    .map(|(pass, photons)| (*pass, photons.as_slice()))
                     .collect();
-                let mut analysis = PhotonMap::build(photons, emitted);
+                let mut analysis = crate::estimate::diffusion::shaped::history_map(
+                    &earlier,
+                    settings.history_photons,
+                )
+                .expect("an earlier pass");
                 d.gradient_pass(&mut analysis);
                 Some((d, analysis))
             }

@@ -3,6 +3,7 @@
 //! into [`EstimatorSettings`]; validation and construction live in [`super::settings`]. Must
 //! not hold anything a film records that the plain settings do not.
 
+use super::diffusion::shaped::HistoryPhotons;
 use super::diffusion::{Crossings, DiffusionKernel, DiffusivityUnits};
 use super::settings::{EstimatorKind, EstimatorSettings, PAPER_K};
 
@@ -175,13 +176,25 @@ pub struct EstimatorFlags {
     /// photons of the N passes before (traced again where a run starts past pass 0, so a pass
     /// is the same wherever it runs), at the pass's own radii; the density is still the
     /// pass's own photons. The shape is then independent of the photons it spreads (a kernel
-    /// shaped by its own photons loses 0.3–0.6% of a caustic's energy), and drawn from N times
-    /// as many, so it stays sharp as the radii shrink; it costs the gradient pass on N + 1
-    /// passes' photons and 110 bytes a kept photon. 0 is faster where a caustic's last
-    /// fraction of a percent does not matter.
+    /// shaped by its own photons loses 0.3–0.6% of a caustic's energy); `--history-photons`
+    /// says how many of the N passes' photons it is drawn from. The history keeps 110 bytes a
+    /// photon of each kept pass. 0 is the paper's own-pass tensor.
     #[arg(long, value_name = "N", default_value_t = super::settings::DEFAULT_TENSOR_HISTORY,
           help_heading = headings::KERNEL, hide_short_help = true)]
     pub tensor_history: u32,
+
+    /// Which photons of the tensor history shape the kernels: one pass's worth, or all.
+    ///
+    /// `one-pass` keeps one photon in N of each of the N earlier passes (at full power): the
+    /// shapes cost about what a pass's own would and are independent of the photons they
+    /// spread, which keeps a caustic's energy. `all` shapes on every photon of the N passes:
+    /// steadier gradients, sharper faint edges (the constructed distribution's edge error
+    /// after 16 passes 0.84× instead of 0.99×), at N times the gradient pass and the
+    /// tensor's scan per pixel, which over a few seconds costs more than it gains on the
+    /// torus knot and the metal ring (BENCHMARKS.md, "A structure tensor across passes").
+    #[arg(long, value_enum, value_name = "PHOTONS", default_value = "one-pass",
+          help_heading = headings::KERNEL, hide_short_help = true)]
+    pub history_photons: HistoryPhotons,
 }
 
 impl EstimatorFlags {
@@ -216,6 +229,7 @@ impl EstimatorFlags {
             kernel: self.kernel,
             crossings: self.crossings,
             tensor_history: self.tensor_history,
+            history_photons: self.history_photons,
         }
     }
 }

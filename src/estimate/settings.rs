@@ -5,6 +5,7 @@
 
 use super::RadianceEstimate;
 use super::classic::{FixedRadiusEstimate, KnnEstimate};
+use super::diffusion::shaped::HistoryPhotons;
 use super::diffusion::{
     Crossings, DiffusionEstimate, DiffusionKernel, DiffusionParams, DiffusivityUnits,
 };
@@ -39,9 +40,9 @@ impl EstimatorKind {
 
 /// Earlier passes whose photons shape a pass's diffusion kernels by default. A kernel shaped
 /// by the photons it sums loses energy, and more as the radii shrink: caustic-glass's image mean
-/// fell to 0.9966 of pbrt's after 100 s with none, and stayed at 0.9991 with 4 (which also
-/// lowered the constructed distribution's edge error after 16 passes to 0.84×). It costs time:
-/// the torus knot's and the metal ring's time to a given short-run error is 1.2–1.5× (BENCHMARKS.md).
+/// fell to 0.9966 of pbrt's after 100 s with none, and stays at 0.9993 with one pass's worth
+/// of the four passes before (`--history-photons one-pass`, which costs about what a pass's own
+/// shapes do; BENCHMARKS.md, "A structure tensor across passes").
 pub const DEFAULT_TENSOR_HISTORY: u32 = 4;
 
 /// `k` of the paper's baseline, the cone filter with 400 photons an estimate.
@@ -107,6 +108,14 @@ pub struct EstimatorSettings {
     /// own). Films written before it existed used their own.
     #[serde(default)]
     pub tensor_history: u32,
+    /// Which of the history's photons shape the kernels. Films written before it existed
+    /// used all.
+    #[serde(default = "all_history_photons")]
+    pub history_photons: HistoryPhotons,
+}
+
+fn all_history_photons() -> HistoryPhotons {
+    HistoryPhotons::All
 }
 
 fn keep_at_crossings() -> Crossings {
@@ -133,6 +142,7 @@ impl Default for EstimatorSettings {
             gradient_sites: default_gradient_sites(),
             crossings: Crossings::Shrink,
             tensor_history: DEFAULT_TENSOR_HISTORY,
+            history_photons: HistoryPhotons::OnePass,
         }
     }
 }

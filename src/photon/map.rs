@@ -116,12 +116,19 @@ impl PhotonMap {
     ) -> Option<&GradientField> {
         match &self.gradients {
             Some(g)
-                if g.radius == radius && (g.thinned_for.is_none() || g.thinned_for == thinning) =>
+                if g.with_gradients
+                    && g.radius == radius
+                    && (g.thinned_for.is_none() || g.thinned_for == thinning) =>
             {
                 Some(g)
             }
             _ => None,
         }
+    }
+    /// The field's powers, leaf normals and leaf moments, with or without gradients (they do
+    /// not depend on a radius): what a kernel shaped elsewhere sums.
+    pub fn leaf_sums(&self) -> Option<&GradientField> {
+        self.gradients.as_ref()
     }
     /// Heap bytes held per photon: the tree, the attributes and the gradients if present.
     pub fn bytes_per_photon(&self) -> f64 {
@@ -165,6 +172,9 @@ pub struct GradientField {
     /// Per leaf, the moments of its channel sums about its box's centre.
     leaf_moments: Vec<LeafMoments>,
     photons: usize,
+    /// Whether the sites' gradients were taken: a field without them holds only what a
+    /// kernel sums (powers, leaf normals and moments), for a map that another map shapes.
+    with_gradients: bool,
 }
 
 /// The normal every photon of each leaf shares (leaves in order from the first), if they
@@ -234,6 +244,15 @@ fn scale_for(largest: f32) -> f64 {
 }
 
 impl GradientField {
+    /// The field of `map` without gradients: its powers, leaf normals and leaf moments only
+    /// ([`PhotonMap::leaf_sums`]).
+    pub fn leaf_sums_of(map: &PhotonMap) -> Self {
+        let n = map.len();
+        let mut field = Self::new(map, &vec![Vec3::ZERO; n], vec![0.0; n], f32::NAN, None);
+        field.with_gradients = false;
+        field
+    }
+
     /// The field of `map` with `gradients` and site `weights` (slot order; a site is a photon
     /// of positive weight, and its gradient is kept), taken at gradient radius `radius` on
     /// sites thinned for `thinned_for` = (smoothing radius, sites per disc) (`None`: all
@@ -260,6 +279,7 @@ impl GradientField {
             thinned_for,
             power: [channel(0), channel(1), channel(2)],
             photons: map.len(),
+            with_gradients: true,
             ..Self::default()
         };
         // Scales (powers of two, so exact) that keep the f32 scans' squares of powers and

@@ -297,16 +297,24 @@ impl PassContext<'_> {
                 estimator = Some(resolved.to_string());
                 if let ResolvedEstimator::Diffusion(d) = &resolved {
                     let start = Instant::now();
-                    let shaping: &mut PhotonMap = match analysis.as_mut() {
-                        Some(a) => a,
-                        None => map,
+                    // Where the history shapes the kernels the pass's own map is only
+                    // summed: its leaf sums, no gradients.
+                    let photons = match analysis.as_mut() {
+                        Some(a) => {
+                            d.gradient_pass(a);
+                            crate::estimate::diffusion::shaped::prepare_summed(map);
+                            a.len()
+                        }
+                        None => {
+                            d.gradient_pass(map);
+                            map.len()
+                        }
                     };
-                    d.gradient_pass(shaping);
                     diffusion = Some(*d);
                     times.accumulate(
                         "gradient pass",
                         start.elapsed(),
-                        &[("photons", shaping.len() as u64)],
+                        &[("photons", photons as u64)],
                     );
                 }
                 Some(resolved)

@@ -118,7 +118,7 @@ impl PassLoop<'_> {
                 kernel_field: self.wiring.kernel_field,
             };
             history.fill_before(pass, self.world, settings, &self.wiring.schedule, times);
-            let analysis = history.analysis_map();
+            let analysis = history.analysis_map(settings.estimator.history_photons);
             if let Some((map, _)) = &maps.caustic {
                 history.record(pass, map);
             }

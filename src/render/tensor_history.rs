@@ -1,12 +1,14 @@
 //! The tensor history of a progressive render: the caustic photons of the passes before the
 //! one running, up to `--tensor-history` of them, from which that pass's diffusion kernels take
-//! their shapes (`estimate::diffusion::shaped::ShapedBy`). A pass's photons depend only on the
-//! seed and its index, so a run that starts past pass 0 (a resumed film, a range rendered
-//! apart) traces the passes before it again and renders the same pass as one run would. Owns
-//! which passes are kept and the map they make; must not shade.
+//! their shapes (`estimate::diffusion::shaped`: one pass's worth of them by default, or all,
+//! `--history-photons`). A pass's photons depend only on the seed and its index, so a run that
+//! starts past pass 0 (a resumed film, a range rendered apart) traces the passes before it
+//! again and renders the same pass as one run would. Owns which passes are kept and the map
+//! they make; must not shade.
 
 use super::pass::{RenderSettings, wanted_maps};
 use super::schedule::Schedule;
+use crate::estimate::diffusion::shaped::{HistoryPhotons, history_map};
 use crate::photon::tracer::{MapKind, trace_map};
 use crate::photon::{Photon, PhotonMap};
 use crate::timing::{PhaseTimes, progress};
@@ -84,19 +86,12 @@ impl TensorHistory {
         }
     }
 
-    /// The map the kernels of the next pass take their shapes from: the kept passes'
-    /// photons, each pass's power divided by their number so that the map's density is one
-    /// pass's. `None` while nothing is kept.
-    pub fn analysis_map(&self) -> Option<PhotonMap> {
-        if self.passes.is_empty() {
-            return None;
-        }
-        let scale = 1.0 / self.passes.len() as f32;
-        let photons: Vec<Photon> = (self.passes.iter())
-            .flat_map(|(_, photons)| photons.iter())
-            .map(|p| Photon::new(p.position(), p.power() * scale, p.direction(), p.normal()))
+    /// The map the kernels of the next pass take their shapes from
+    /// ([`history_map`]). `None` while nothing is kept.
+    pub fn analysis_map(&self, photons: HistoryPhotons) -> Option<PhotonMap> {
+        let passes: Vec<(u64, &[Photon])> = (self.passes.iter())
+            .map(|(pass, photons)| (*pass, photons.as_slice()))
             .collect();
-        let emitted = photons.len() as u64;
-        Some(PhotonMap::build(photons, emitted))
+        history_map(&passes, photons)
     }
 }

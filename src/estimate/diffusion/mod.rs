@@ -250,29 +250,9 @@ impl DiffusionEstimate {
         };
         let tree = map.tree();
         let (runs, inputs) = (&mut scratch.kernel_runs, &mut scratch.kernel_inputs);
-        runs.clear();
         inputs.clear();
-        // Neighbouring one-surface leaves come in slot order and merge into runs, so each
-        // run is one loop, not one per leaf of twenty photons.
-        let mut mixed = Vec::new();
-        tree.for_each_leaf_within(
-            query.position,
-            r2.max(rho2) as f32,
-            |leaf, slots| match field.leaf_normal(leaf) {
-                Some(n) if n.dot(normal) < NORMAL_AGREEMENT_MIN_COS => {}
-                Some(_) => match runs.last_mut() {
-                    Some(run) if run.slots.end == slots.start => {
-                        run.slots.end = slots.end;
-                        run.leaves.end = leaf + 1;
-                    }
-                    _ => runs.push(LeafRun {
-                        leaves: leaf..leaf + 1,
-                        slots,
-                    }),
-                },
-                None => mixed.push((leaf, slots)),
-            },
-        );
+        let reach2 = r2.max(rho2) as f32;
+        let mixed = surface_leaves(map, field, (query.position, normal), reach2, runs);
         for run in runs.iter() {
             sums.scan_run(tree, field, query.position, run, &radii);
         }
@@ -337,6 +317,48 @@ impl DiffusionEstimate {
         (tensor, shape)
     }
 
+    /// The kernel `tensor` shapes at the query, summed over the photons `scratch` holds of
+    /// `map` (runs of its leaves on the query's surface, and single photons within `r`):
+    /// irradiance.
+    fn kernel_sum(
+        &self,
+        map: &PhotonMap,
+        field: &GradientField,
+        tensor: &DiffusionTensor,
+        query: &Query,
+        scratch: &Scratch,
+    ) -> Vec3 {
+        let kernel = self.params.kernel.radial().prepare();
+        let r2 = sq(self.params.radius);
+        let metric = tensor.metric(r2);
+        let mut sum = match self.params.kernel {
+            DiffusionKernel::Epanechnikov => {
+                let scan = EllipseScan::new(&metric, query.position);
+                let mut s = DVec3::ZERO;
+                for run in &scratch.kernel_runs {
+                    s += scan.run(map.tree(), field, run);
+                }
+                s * (2.0 / std::f64::consts::PI)
+            }
+            DiffusionKernel::Gaussian => {
+                let mut s = DVec3::ZERO;
+                for run in &scratch.kernel_runs {
+                    for slot in run.slots.clone() {
+                        let slot = slot as u32;
+                        let d = map.position(slot) - query.position;
+                        let power = power_of(map.attributes(slot));
+                        s += kernel.weight(metric.distance(d.as_dvec3())) * power;
+                    }
+                }
+                s
+            }
+        };
+        for (d, power, _) in &scratch.kernel_inputs {
+            sum += kernel.weight(metric.distance(d.as_dvec3())) * *power;
+        }
+        to_irradiance(sum * (tensor.plane_normalisation() / r2))
+    }
+
     /// The gradient pass this estimate reads: gradients at its gradient radius, on sites
     /// thinned for its smoothing radius (see [`sites`]). [`RadianceEstimate::prepare`] runs
     /// it when the map holds no such field; call it yourself to time it as its own phase.
@@ -355,6 +377,39 @@ impl DiffusionEstimate {
     fn field<'m>(&self, map: &'m PhotonMap) -> Option<&'m GradientField> {
         map.gradients_at(self.params.gradient_radius, self.thinning())
     }
+}
+
+/// The leaves of `map` within `reach2` of the query that lie on its surface: neighbouring
+/// one-surface leaves merged into runs in `runs` (cleared first: they come in slot order, so
+/// each run is one loop, not one per leaf of twenty photons), and the leaves that hold several
+/// surfaces returned, to be read photon by photon.
+fn surface_leaves(
+    map: &PhotonMap,
+    field: &GradientField,
+    (position, normal): (Vec3, Vec3),
+    reach2: f32,
+    runs: &mut Vec<LeafRun>,
+) -> Vec<(usize, std::ops::Range<usize>)> {
+    runs.clear();
+    let mut mixed = Vec::new();
+    map.tree()
+        .for_each_leaf_within(position, reach2, |leaf, slots| {
+            match field.leaf_normal(leaf) {
+                Some(n) if n.dot(normal) < NORMAL_AGREEMENT_MIN_COS => {}
+                Some(_) => match runs.last_mut() {
+                    Some(run) if run.slots.end == slots.start => {
+                        run.slots.end = slots.end;
+                        run.leaves.end = leaf + 1;
+                    }
+                    _ => runs.push(LeafRun {
+                        leaves: leaf..leaf + 1,
+                        slots,
+                    }),
+                },
+                None => mixed.push((leaf, slots)),
+            }
+        });
+    mixed
 }
 
 /// Expected variance per tangent axis of the Eq. 6 gradient from photon noise alone, where the
@@ -401,37 +456,8 @@ impl RadianceEstimate for DiffusionEstimate {
 
     fn irradiance(&self, map: &PhotonMap, query: &Query, scratch: &mut Scratch) -> Vec3 {
         let (tensor, _) = self.analyse(map, query, scratch);
-        let kernel = self.params.kernel.radial().prepare();
-        let r2 = sq(self.params.radius);
-        let metric = tensor.metric(r2);
         let field = self.field(map).expect("analysed above");
-        // The photons the analysis kept: within r, on the query's surface (its normal is X3).
-        let mut sum = match self.params.kernel {
-            DiffusionKernel::Epanechnikov => {
-                let scan = EllipseScan::new(&metric, query.position);
-                let mut s = DVec3::ZERO;
-                for run in &scratch.kernel_runs {
-                    s += scan.run(map.tree(), field, run);
-                }
-                s * (2.0 / std::f64::consts::PI)
-            }
-            DiffusionKernel::Gaussian => {
-                let mut s = DVec3::ZERO;
-                for run in &scratch.kernel_runs {
-                    for slot in run.slots.clone() {
-                        let slot = slot as u32;
-                        let d = map.position(slot) - query.position;
-                        let power = power_of(map.attributes(slot));
-                        s += kernel.weight(metric.distance(d.as_dvec3())) * power;
-                    }
-                }
-                s
-            }
-        };
-        for (d, power, _) in &scratch.kernel_inputs {
-            sum += kernel.weight(metric.distance(d.as_dvec3())) * *power;
-        }
-        to_irradiance(sum * (tensor.plane_normalisation() / r2))
+        self.kernel_sum(map, field, &tensor, query, scratch)
     }
 
     /// The same kernel over the same photons as [`DiffusionEstimate::irradiance`], photon by
