@@ -430,7 +430,7 @@ fn progressive_density_converges_on_the_constructed_distribution() {
 /// Kernels shaped by the four passes before against kernels shaped by each pass's own
 /// photons, same photons: in the edge band after 16 passes, every photon of the four passes
 /// (`--history-photons all`) 0.364 against 0.397–0.403 on seeds 1, 2 and 3, one pass's worth
-/// of them (the default) 0.387–0.390; energy within 1% every way.
+/// of them (the default) 0.383–0.388; energy within 1% every way.
 #[test]
 fn a_tensor_history_sharpens_the_edges_of_a_progressive_estimate() {
     let run = |flags: &[&str]| (constructed_16_passes(flags).metrics).expect("a known density");

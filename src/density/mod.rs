@@ -311,7 +311,9 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
         let start = Instant::now();
         let source = load_photons_with_seed(args, schedule.seed(pass))?;
         if settings.tensor_history > 0 {
-            history.push_back((pass, source.photons.clone()));
+            let depth = u64::from(settings.tensor_history);
+            let kept = (settings.history_photons).kept(pass, depth, source.photons.iter().copied());
+            history.push_back((pass, kept));
         }
         photon_count = source.photons.len();
         source_name = source.name;
@@ -341,8 +343,10 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
                     .take(history.len() - 1)
                     .map(|(pass, photons)| (*pass, photons.as_slice()))
                     .collect();
+                let depth = u64::from(settings.tensor_history);
                 let mut analysis = crate::estimate::diffusion::shaped::history_map(
                     &earlier,
+                    depth,
                     settings.history_photons,
                 )
                 .expect("an earlier pass");

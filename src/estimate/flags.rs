@@ -177,19 +177,20 @@ pub struct EstimatorFlags {
     /// is the same wherever it runs), at the pass's own radii; the density is still the
     /// pass's own photons. The shape is then independent of the photons it spreads (a kernel
     /// shaped by its own photons loses 0.3–0.6% of a caustic's energy); `--history-photons`
-    /// says how many of the N passes' photons it is drawn from. The history keeps 110 bytes a
-    /// photon of each kept pass. 0 is the paper's own-pass tensor.
+    /// says how many of the N passes' photons it is drawn from, and so kept (110 bytes a kept
+    /// photon). 0 is the paper's own-pass tensor.
     #[arg(long, value_name = "N", default_value_t = super::settings::DEFAULT_TENSOR_HISTORY,
           help_heading = headings::KERNEL, hide_short_help = true)]
     pub tensor_history: u32,
 
     /// Which photons of the tensor history shape the kernels: one pass's worth, or all.
     ///
-    /// `one-pass` keeps one photon in N of each of the N earlier passes (at full power): the
-    /// shapes cost about what a pass's own would and are independent of the photons they
-    /// spread, which keeps a caustic's energy. `all` shapes on every photon of the N passes:
+    /// `one-pass` keeps one photon in N of each of the N earlier passes (more of the first
+    /// ones, which shape the passes right after them with fewer beside them): the shapes cost
+    /// about what a pass's own would and are independent of the photons they spread, which
+    /// keeps a caustic's energy, and the history holds about one pass's photons. `all` shapes on every photon of the N passes:
     /// steadier gradients, sharper faint edges (the constructed distribution's edge error
-    /// after 16 passes 0.84× instead of 0.99×), at N times the gradient pass and the
+    /// after 16 passes 0.84× instead of 0.97×), at N times the gradient pass and the
     /// tensor's scan per pixel, which over a few seconds costs more than it gains on the
     /// torus knot and the metal ring (BENCHMARKS.md, "A structure tensor across passes").
     #[arg(long, value_enum, value_name = "PHOTONS", default_value = "one-pass",

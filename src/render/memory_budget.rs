@@ -28,14 +28,19 @@ pub const BYTES_PER_PIXEL: u64 = 240;
 /// What is assumed available when /proc/meminfo cannot be read.
 pub const FALLBACK_MEMORY: u64 = 16 << 30;
 
+/// Bytes a caustic photon's share of `passes` passes' worth of tensor history costs.
+fn history_bytes(passes: f64) -> u64 {
+    (passes * HISTORY_BYTES as f64).ceil() as u64
+}
+
 /// Estimated peak memory of the photon maps and the image, in bytes (saturating): with the
-/// diffusion estimate, `history` earlier passes' caustic photons too. Loaded maps need no
+/// diffusion estimate, `history` passes' worth of earlier caustic photons too. Loaded maps need no
 /// tracing records, so for them this is an overestimate.
-pub fn memory_estimate(wanted: &[MapInfo], diffusion: Option<u32>, width: u32, height: u32) -> u64 {
+pub fn memory_estimate(wanted: &[MapInfo], diffusion: Option<f64>, width: u32, height: u32) -> u64 {
     let photons = wanted.iter().fold(0u64, |sum, info| {
         let per = match (diffusion, info.kind) {
             (Some(history), MapKind::Caustic) => {
-                BYTES_PER_PHOTON + GRADIENT_BYTES + u64::from(history) * HISTORY_BYTES
+                BYTES_PER_PHOTON + GRADIENT_BYTES + history_bytes(history)
             }
             _ => BYTES_PER_PHOTON,
         };
@@ -87,8 +92,9 @@ pub(super) fn check_memory(
     wanted: &[MapInfo],
 ) -> Result<(), RenderError> {
     let camera = &world.description.camera;
-    let diffusion =
-        (estimator.estimator == EstimatorKind::Diffusion).then_some(estimator.tensor_history);
+    // Passes' worth of caustic photons the tensor history keeps.
+    let diffusion = (estimator.estimator == EstimatorKind::Diffusion)
+        .then_some((estimator.history_photons).passes_kept(estimator.tensor_history));
     let (width, height) = camera.image_size();
     let needed = memory_estimate(wanted, diffusion, width, height);
     let (available, source) = available_memory();
@@ -111,8 +117,8 @@ pub(super) fn check_memory(
         BYTES_PER_PHOTON,
         match diffusion {
             Some(history) => format!(
-                ", {} a caustic photon with its gradient and --tensor-history {history}",
-                BYTES_PER_PHOTON + GRADIENT_BYTES + u64::from(history) * HISTORY_BYTES
+                ", {} a caustic photon with its gradient and {history:.2} passes' worth of tensor history",
+                BYTES_PER_PHOTON + GRADIENT_BYTES + history_bytes(history)
             ),
             None => String::new(),
         },

@@ -70,10 +70,13 @@ impl PassLoop<'_> {
         let bar = self.bar(first, last);
         let mut last_write: Option<Instant> = None;
         let settings = &self.wiring.settings;
-        let mut history = TensorHistory::new(match settings.estimator.estimator {
-            EstimatorKind::Diffusion => settings.estimator.tensor_history,
-            _ => 0,
-        });
+        let mut history = TensorHistory::new(
+            match settings.estimator.estimator {
+                EstimatorKind::Diffusion => settings.estimator.tensor_history,
+                _ => 0,
+            },
+            settings.estimator.history_photons,
+        );
         for pass in first..last {
             if self.budget_spent(&out.records) {
                 break;
@@ -118,7 +121,7 @@ impl PassLoop<'_> {
                 kernel_field: self.wiring.kernel_field,
             };
             history.fill_before(pass, self.world, settings, &self.wiring.schedule, times);
-            let analysis = history.analysis_map(settings.estimator.history_photons);
+            let analysis = history.analysis_map();
             if let Some((map, _)) = &maps.caustic {
                 history.record(pass, map);
             }

@@ -19,14 +19,18 @@ use std::time::Instant;
 /// The caustic photons of the latest passes, oldest first.
 pub struct TensorHistory {
     depth: u64,
+    /// Which of a pass's photons are kept.
+    photons: HistoryPhotons,
     passes: VecDeque<(u64, Vec<Photon>)>,
 }
 
 impl TensorHistory {
-    /// A history of `depth` passes (0: none is kept; each pass shapes its own kernels).
-    pub fn new(depth: u32) -> Self {
+    /// A history of `depth` passes (0: none is kept; each pass shapes its own kernels),
+    /// keeping `photons` of each.
+    pub fn new(depth: u32, photons: HistoryPhotons) -> Self {
         Self {
             depth: u64::from(depth),
+            photons,
             passes: VecDeque::new(),
         }
     }
@@ -71,7 +75,8 @@ impl TensorHistory {
                 return;
             }
             let at = self.passes.partition_point(|(p, _)| *p < earlier);
-            self.passes.insert(at, (earlier, map.photons().collect()));
+            let kept = (self.photons).kept(earlier, self.depth, map.photons());
+            self.passes.insert(at, (earlier, kept));
         }
     }
 
@@ -80,7 +85,8 @@ impl TensorHistory {
         if self.depth == 0 {
             return;
         }
-        self.passes.push_back((pass, map.photons().collect()));
+        let kept = (self.photons).kept(pass, self.depth, map.photons());
+        self.passes.push_back((pass, kept));
         while self.passes.len() as u64 > self.depth {
             self.passes.pop_front();
         }
@@ -88,10 +94,10 @@ impl TensorHistory {
 
     /// The map the kernels of the next pass take their shapes from
     /// ([`history_map`]). `None` while nothing is kept.
-    pub fn analysis_map(&self, photons: HistoryPhotons) -> Option<PhotonMap> {
-        let passes: Vec<(u64, &[Photon])> = (self.passes.iter())
+    pub fn analysis_map(&self) -> Option<PhotonMap> {
+        let kept: Vec<(u64, &[Photon])> = (self.passes.iter())
             .map(|(pass, photons)| (*pass, photons.as_slice()))
             .collect();
-        history_map(&passes, photons)
+        history_map(&kept, self.depth, self.photons)
     }
 }

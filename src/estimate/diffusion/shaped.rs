@@ -21,8 +21,9 @@ use glam::{DVec3, Vec3};
 #[serde(rename_all = "kebab-case")]
 pub enum HistoryPhotons {
     /// One pass's worth: of N earlier passes, one photon in N of each (every N-th in the
-    /// map's spatial order, offset by the pass), at full power. The shapes cost what a pass's
-    /// own would and are independent of the photons they spread.
+    /// map's spatial order, offset by the pass; the first passes keep more), kept as the pass
+    /// ends. The shapes cost what a pass's own would and are independent of the photons they
+    /// spread, and the history holds about one pass's photons (at most 1 + 1/2 + ... + 1/N).
     OnePass,
     /// Every photon of the N passes at 1/N of its power: shapes from N times the photons,
     /// sharper where edges are faint, at N + 1 times the gradient pass and N times the
@@ -39,28 +40,61 @@ pub fn prepare_summed(map: &mut PhotonMap) {
     }
 }
 
-/// The map that shapes a pass's kernels, from the earlier passes' photons (`(pass, photons)`,
-/// in any order): its density is one pass's whichever `photons` it keeps. `None` when there
-/// is no earlier pass.
-pub fn history_map(passes: &[(u64, &[Photon])], photons: HistoryPhotons) -> Option<PhotonMap> {
-    let n = passes.len() as u64;
-    if n == 0 {
+impl HistoryPhotons {
+    /// One photon in how many of pass `pass` a history of `depth` passes keeps. One-pass:
+    /// `depth`, but fewer for the first passes, which serve the passes right after them with
+    /// fewer passes beside them (pass 0 all, pass 1 one in two, ...); all: 1.
+    pub fn stride(self, pass: u64, depth: u64) -> u64 {
+        match self {
+            HistoryPhotons::OnePass => (pass + 1).min(depth).max(1),
+            HistoryPhotons::All => 1,
+        }
+    }
+
+    /// The photons of pass `pass` that a history of `depth` passes keeps: every
+    /// [`Self::stride`]-th in the order given, from the pass's index modulo it (consecutive
+    /// passes keep interleaved strata).
+    pub fn kept(self, pass: u64, depth: u64, photons: impl Iterator<Item = Photon>) -> Vec<Photon> {
+        let stride = self.stride(pass, depth);
+        photons
+            .skip((pass % stride) as usize)
+            .step_by(stride as usize)
+            .collect()
+    }
+
+    /// Passes' worth of photons a history of `depth` passes holds at most: all of them, or
+    /// for one-pass the first passes' larger shares, 1 + 1/2 + ... + 1/depth.
+    pub fn passes_kept(self, depth: u32) -> f64 {
+        match self {
+            HistoryPhotons::OnePass => (1..=depth).map(|i| 1.0 / f64::from(i)).sum(),
+            HistoryPhotons::All => f64::from(depth),
+        }
+    }
+}
+
+/// The map that shapes a pass's kernels, from what a history of `depth` passes kept of the
+/// earlier ones (`(pass, photons)` as [`HistoryPhotons::kept`] kept them): its density is one
+/// pass's, each kept photon's power scaled by the photons it stands for over the number of
+/// passes. `None` when there is no earlier pass.
+pub fn history_map(
+    kept: &[(u64, &[Photon])],
+    depth: u64,
+    photons: HistoryPhotons,
+) -> Option<PhotonMap> {
+    let n = kept.len() as f32;
+    if kept.is_empty() {
         return None;
     }
-    let (stride, scale) = match photons {
-        HistoryPhotons::OnePass => (n, 1.0),
-        HistoryPhotons::All => (1, 1.0 / n as f32),
-    };
-    let kept: Vec<Photon> = (passes.iter())
-        .flat_map(|&(pass, photons)| {
-            // Pass p keeps slots p, p + n, ...: the passes keep interleaved strata.
-            let offset = (pass % stride) as usize;
-            photons.iter().skip(offset).step_by(stride as usize)
+    let map: Vec<Photon> = (kept.iter())
+        .flat_map(|&(pass, kept)| {
+            let scale = photons.stride(pass, depth) as f32 / n;
+            kept.iter().map(move |p| {
+                Photon::new(p.position(), p.power() * scale, p.direction(), p.normal())
+            })
         })
-        .map(|p| Photon::new(p.position(), p.power() * scale, p.direction(), p.normal()))
         .collect();
-    let emitted = kept.len() as u64;
-    Some(PhotonMap::build(kept, emitted))
+    let emitted = map.len() as u64;
+    Some(PhotonMap::build(map, emitted))
 }
 
 /// A diffusion estimate whose kernels take their shapes from `analysis` (which must hold
@@ -196,15 +230,42 @@ mod tests {
     fn one_pass_of_history_holds_one_pass_and_all_holds_every_photon_at_its_share() {
         let photons = pass_photons(1001);
         let one = power(&PhotonMap::build(photons.clone(), 1001));
-        // Four consecutive passes of the same photons: their offsets cover every slot once.
-        let passes: Vec<(u64, &[Photon])> = (7..11).map(|p| (p, photons.as_slice())).collect();
-        let thinned = history_map(&passes, HistoryPhotons::OnePass).unwrap();
-        assert_eq!(thinned.len(), photons.len());
-        assert!((power(&thinned) - one).abs().max_element() < 1e-3 * one.max_element());
-        let all = history_map(&passes, HistoryPhotons::All).unwrap();
-        assert_eq!(all.len(), 4 * photons.len());
-        assert!((power(&all) - one).abs().max_element() < 1e-3 * one.max_element());
-        assert!(history_map(&[], HistoryPhotons::OnePass).is_none());
+        let close =
+            |map: &PhotonMap| (power(map) - one).abs().max_element() < 1e-2 * one.max_element();
+        for history in [HistoryPhotons::OnePass, HistoryPhotons::All] {
+            let kept: Vec<(u64, Vec<Photon>)> = (0..12)
+                .map(|p| (p, history.kept(p, 4, photons.iter().copied())))
+                .collect();
+            let slices: Vec<(u64, &[Photon])> =
+                kept.iter().map(|(p, k)| (*p, k.as_slice())).collect();
+            // Pass 1 is shaped by pass 0, pass 3 by passes 0-2, pass 12 by passes 8-11 (four
+            // passes of the same photons: one-pass strata cover every slot once).
+            for earlier in [&slices[..1], &slices[..3], &slices[8..12]] {
+                let map = history_map(earlier, 4, history).unwrap();
+                assert!(close(&map), "{history:?}");
+            }
+            let steady = history_map(&slices[8..12], 4, history).unwrap();
+            let passes = if history == HistoryPhotons::OnePass {
+                1
+            } else {
+                4
+            };
+            assert_eq!(steady.len(), passes * photons.len(), "{history:?}");
+        }
+        assert_eq!(
+            HistoryPhotons::OnePass
+                .kept(0, 4, photons.iter().copied())
+                .len(),
+            1001
+        );
+        assert_eq!(
+            HistoryPhotons::OnePass
+                .kept(2, 4, photons.iter().copied())
+                .len(),
+            333 // slots 2, 5, ..., 998 of 1001: pass 2 keeps one in three
+        );
+        assert!((HistoryPhotons::OnePass.passes_kept(4) - 25.0 / 12.0).abs() < 1e-12);
+        assert!(history_map(&[], 4, HistoryPhotons::OnePass).is_none());
     }
 
     fn uniform(i: u64, salt: u64) -> f32 {
