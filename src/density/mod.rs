@@ -305,13 +305,13 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
     // The photons of the passes before, newest last, that shape a pass's kernels.
     let mut history: std::collections::VecDeque<(u64, Vec<crate::photon::Photon>)> =
         Default::default();
+    let depth = u64::from(settings.tensor_history);
     for pass in 0..args.passes {
         // Only the last pass's map is kept (for the kernel field): free the previous one first.
         drop(last_map.take());
         let start = Instant::now();
         let source = load_photons_with_seed(args, schedule.seed(pass))?;
-        if settings.tensor_history > 0 {
-            let depth = u64::from(settings.tensor_history);
+        if depth > 0 {
             let kept = (settings.history_photons).kept(pass, depth, source.photons.iter().copied());
             history.push_back((pass, kept));
         }
@@ -343,7 +343,6 @@ pub fn run(args: &DensityArgs) -> Result<DensityReport, DensityError> {
                     .take(history.len() - 1)
                     .map(|(pass, photons)| (*pass, photons.as_slice()))
                     .collect();
-                let depth = u64::from(settings.tensor_history);
                 let mut analysis = crate::estimate::diffusion::shaped::history_map(
                     &earlier,
                     depth,

@@ -26,18 +26,8 @@ pub enum HistoryPhotons {
     /// spread, and the history holds about one pass's photons (at most 1 + 1/2 + ... + 1/N).
     OnePass,
     /// Every photon of the N passes at 1/N of its power: shapes from N times the photons,
-    /// sharper where edges are faint, at N + 1 times the gradient pass and N times the
-    /// tensor's scan.
+    /// sharper where edges are faint, at N times the gradient pass and the tensor's scan.
     All,
-}
-
-/// Gives a map that [`ShapedBy`] sums its leaf sums (powers, leaf normals and moments, no
-/// gradients), unless it holds a field already.
-pub fn prepare_summed(map: &mut PhotonMap) {
-    if map.leaf_sums().is_none() {
-        let field = crate::photon::map::GradientField::leaf_sums_of(map);
-        map.set_gradient_field(field);
-    }
 }
 
 impl HistoryPhotons {
@@ -95,6 +85,15 @@ pub fn history_map(
         .collect();
     let emitted = map.len() as u64;
     Some(PhotonMap::build(map, emitted))
+}
+
+/// Gives a map that [`ShapedBy`] sums its leaf sums (powers, leaf normals and moments, no
+/// gradients), unless it holds a field already.
+pub fn prepare_summed(map: &mut PhotonMap) {
+    if map.leaf_sums().is_none() {
+        let field = crate::photon::map::GradientField::leaf_sums_of(map);
+        map.set_gradient_field(field);
+    }
 }
 
 /// A diffusion estimate whose kernels take their shapes from `analysis` (which must hold
