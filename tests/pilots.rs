@@ -42,7 +42,10 @@ fn world_x(column: f64, depth: f64) -> f64 {
 }
 
 fn plan(text: &str, emission: u32, edge: u32) -> PixelPlan {
-    let desc = description(text);
+    plan_of(description(text), emission, edge)
+}
+
+fn plan_of(desc: dpm::scene::SceneDescription, emission: u32, edge: u32) -> PixelPlan {
     let camera = RayCamera::new(&desc.camera);
     let world = dpm::world::World::new(desc).expect("world");
     in_pool(2, || PixelPlan::survey(&camera, &world, 10, emission, edge)).expect("not interrupted")
@@ -130,6 +133,37 @@ fn a_silhouette_makes_exactly_its_column_an_edge() {
     assert_eq!(planned.camera_samples(21, 8), 8);
     // Without edge samples every pixel takes `spp`.
     assert!(edges(&plan(&text, 16, 0)).is_empty());
+}
+
+/// A grey quad's silhouette against a constant sky: every ray that leaves the scene sees the
+/// same radiance, so camera samples count it exactly and no pixel samples its emission apart.
+/// Against an image sky of that same radiance (its texels could hold a sun) the silhouette's
+/// column does, and only it.
+#[test]
+fn a_constant_sky_flags_no_pixel_and_an_image_sky_flags_the_silhouette() {
+    let edge = world_x(21.37, 10.0);
+    let sky = "[[lights]]\ntype = \"environment\"\nradiance = [0.2, 0.2, 0.2]\n";
+    let text = scene(sky, &quad_left_of(edge, 0.0, "grey"));
+    assert!(emission(&plan(&text, 16, 0)).is_empty());
+
+    let dir = tempfile::tempdir().unwrap();
+    let map = dpm::image_io::Image::from_fn(8, 4, |_, _| glam::Vec3::splat(0.2));
+    let options = dpm::image_io::WriteOptions::default();
+    dpm::image_io::write_image(&dir.path().join("sky.pfm"), &map, &options).unwrap();
+    let pbrt = format!(
+        "LookAt 0 0 10  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n\
+         Film \"image\" \"integer xresolution\" {SIDE} \"integer yresolution\" {SIDE}\n\
+         WorldBegin\nLightSource \"infinite\" \"string mapname\" \"sky.pfm\"\n\
+         Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]\n\
+         Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+         \"point3 P\" [-50 -50 0  {edge} -50 0  {edge} 50 0  -50 50 0]\nWorldEnd\n"
+    );
+    let path = dir.path().join("sky.pbrt");
+    std::fs::write(&path, pbrt).unwrap();
+    let flags = emission(&plan_of(dpm::scene::load(&path).unwrap(), 16, 0));
+    let column = flags.first().expect("the silhouette's column is flagged").0;
+    assert_eq!(flags, (0..SIDE).map(|y| (column, y)).collect::<Vec<_>>());
+    assert!(column == 21 || column == SIDE - 1 - 21, "{column}");
 }
 
 /// A wall filling the view under a distant light from the right at 45°; a quad out of sight

@@ -202,8 +202,9 @@ pub struct RenderArgs {
     /// in each pixel where a pilot ray meets a light, mirror or glass first; those pixels'
     /// camera samples leave that light out. A light's image through glass is often smaller
     /// than a pixel, and a camera sample's rare hit of it is the largest error of a few
-    /// passes: these samples are rays only, so many cost little. 0: camera samples count it
-    /// themselves.
+    /// passes: these samples are rays only, so many cost little. A constant environment flags
+    /// no pixel (every ray that leaves sees it alike: camera samples, whose glass splits, count
+    /// it exactly). 0: camera samples count it themselves.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_EMISSION_SAMPLES,
           help_heading = headings::EYE, hide_short_help = true)]
     pub emission_samples: u32,

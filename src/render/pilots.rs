@@ -4,8 +4,10 @@
 //! find plans each pixel for the whole render ([`PixelPlan`]):
 //!
 //! - **Emission apart** (`--emission-samples`): a chain's last ray meets a light, leaves the
-//!   scene under a lit environment, or passes within the pixel's spread of a light, so a light
-//!   image smaller than the pilots' spacing may lie inside the pixel ([`super::emission`]).
+//!   scene under an image environment, or passes within the pixel's spread of a light, so a
+//!   light image smaller than the pilots' spacing may lie inside the pixel
+//!   ([`super::emission`]). A constant environment flags nothing: every ray that leaves sees
+//!   the same radiance, so camera samples count it exactly.
 //! - **Edge** (`--edge-samples`): the pilots disagree on what the pixel shows — other objects
 //!   along their chains, another chain shape, normals more than 30° apart, or a light's
 //!   probe point visible from one pilot's diffuse hit and hidden from another's (a shadow's
@@ -196,7 +198,11 @@ impl<'w> Survey<'w> {
                 break;
             }
             let Some(closest) = world.closest_hit(o, d, 0.0, f32::INFINITY) else {
-                pilot.emitting += u32::from(world.background(d) != Vec3::ZERO);
+                // A constant environment gives every leaving ray the same radiance: a camera
+                // sample sees it exactly, through glass split as camera paths split it, with no
+                // lottery to take apart. An image environment's bright texels (a sun) are one.
+                pilot.emitting +=
+                    u32::from(world.has_sky_map() && world.background(d) != Vec3::ZERO);
                 pilot.shape.add(u64::MAX);
                 last_rays.push((o, d, code));
                 continue;
@@ -386,7 +392,7 @@ struct LastRay {
 struct Pilot {
     /// The chains' last rays, one per branch followed to its end.
     last_rays: Vec<LastRay>,
-    /// Last rays that meet a light, or leave the scene under a lit environment.
+    /// Last rays that meet a light, or leave the scene under an image environment.
     emitting: u32,
     /// The chains were too many to follow.
     tangled: bool,

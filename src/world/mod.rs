@@ -490,6 +490,12 @@ impl World {
         self.background != Vec3::ZERO || !self.sky_maps.is_empty()
     }
 
+    /// Whether what a ray leaving the scene sees depends on its direction (an image
+    /// environment).
+    pub fn has_sky_map(&self) -> bool {
+        !self.sky_maps.is_empty()
+    }
+
     /// Whether any object is a mirror, glass or glossy (so caustic photons exist) and some
     /// diffuse surface could receive what it focuses: not a convex sphere alone, whose own
     /// glossy reflections leave it.
