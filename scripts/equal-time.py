@@ -19,7 +19,10 @@ The error is the relative MSE of examples/image_error.rs (the mean over pixels o
 quarter of the pixel (its image mean), or of IMAGE.exr's (--region-from: to compare dpm's
 settings over one region); its error is the same sum over those pixels only, with the same eps.
 `--sppm none` renders dpm alone. Blocks the reference leaves darker than 1% of its mean are left out of the
-block range. Needs numpy and OpenEXR (pip install numpy OpenEXR). Run it with nothing else on
+block range. pbrt-v3 has no seed: an SPPM run draws the same camera samples and photons as the
+first iterations of an SPPM reference, so its error against that reference is flattered; make
+the reference many times longer than the longest run it judges. Needs numpy and OpenEXR (pip
+install numpy OpenEXR). Run it with nothing else on
 the machine: the figures are wall-clock times.
 """
 
