@@ -1,7 +1,8 @@
 //! The pilot rays' plan (`render::pilots`): which pixels sample their emitted light apart —
 //! a light smaller than the pilots' spacing, seen directly or in a mirror, flags its pixel; a
-//! mirror that shows nothing near a light does not — and which hold an edge: exactly the
-//! column a silhouette or a shadow's edge crosses. Edge pixels' extra camera samples resolve
+//! mirror that shows nothing near a light does not, nor does a constant sky, while an image
+//! sky flags a silhouette against it — and which hold an edge: exactly the column a silhouette
+//! or a shadow's edge crosses. Edge pixels' extra camera samples resolve
 //! the step inside them where one sample gives all or nothing, and an out-of-range count is
 //! refused.
 
