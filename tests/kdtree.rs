@@ -1,4 +1,5 @@
-//! The kd-tree against brute force: every query type, on random and degenerate data.
+//! The kd-tree against brute force: every query type (k nearest, within a radius, the nearest a
+//! predicate takes), on random and degenerate data.
 //! Distances are compared as sorted lists (ties make the set of slots ambiguous for k-nearest
 //! queries); radius queries have no ties at the boundary question, so their slots are compared
 //! exactly.
@@ -203,6 +204,30 @@ fn check_within(tree: &KdTree, points: &[Vec3], q: Vec3, radius2: f32, out: &mut
     assert_eq!(found, expected);
 }
 
+/// The nearest point a predicate takes, against brute force: the least (distance, slot) among
+/// the taken points within the limit. Taken: a slot-dependent half of the points (whether the
+/// source index is even or odd), and a distance-dependent set (beyond a floor), so that the
+/// search must pass over near points it may not take.
+fn check_nearest_where(tree: &KdTree, points: &[Vec3], q: Vec3, max_dist2: f32, floor2: f32) {
+    for parity in 0..2 {
+        let takes =
+            |slot: u32, d2: f32| tree.source_index(slot as usize) % 2 == parity && d2 >= floor2;
+        let expected = (0..tree.len() as u32)
+            .map(|slot| {
+                let source = tree.source_index(slot as usize) as usize;
+                (points[source].distance_squared(q), slot)
+            })
+            .filter(|&(d2, slot)| d2 <= max_dist2 && takes(slot, d2))
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let found = tree.nearest_where(q, max_dist2, takes);
+        assert_eq!(
+            found.map(|n| (n.dist2, n.slot)),
+            expected,
+            "max_dist2 = {max_dist2}, floor2 = {floor2}, parity {parity}, q = {q}"
+        );
+    }
+}
+
 /// Builds the tree on `points` and checks every query type with several k and radii.
 fn check_all(points: &[Vec3], query_count: usize, ks: &[usize], seed: u64) {
     let tree = KdTree::build(points);
@@ -217,6 +242,9 @@ fn check_all(points: &[Vec3], query_count: usize, ks: &[usize], seed: u64) {
         }
         let radius = 0.2 * rng.unit();
         check_within(&tree, points, q, radius * radius, &mut out);
+        check_nearest_where(&tree, points, q, f32::INFINITY, 0.0);
+        check_nearest_where(&tree, points, q, radius * radius, 0.0);
+        check_nearest_where(&tree, points, q, f32::INFINITY, 0.01 * rng.unit());
         check_within(&tree, points, q, 0.0, &mut out);
         if !points.is_empty() {
             // Limits equal to a point's distance: both queries include the boundary.
@@ -300,6 +328,12 @@ fn empty_tree_finds_nothing() {
 
 #[test]
 fn nan_queries_k_zero_and_nan_limits_find_nothing() {
+    let any = |_: u32, _: f32| true;
+    let tree = KdTree::build(&random_box(100, 20));
+    assert_eq!(tree.nearest_where(Vec3::NAN, f32::INFINITY, any), None);
+    assert_eq!(tree.nearest_where(Vec3::ZERO, f32::NAN, any), None);
+    assert_eq!(tree.nearest_where(Vec3::ZERO, -1.0, any), None);
+    assert_eq!(KdTree::build(&[]).nearest_where(Vec3::ZERO, 1.0, any), None);
     let points = random_box(500, 14);
     let tree = KdTree::build(&points);
     let mut out = Neighbours::new();
@@ -426,6 +460,8 @@ proptest! {
         for q in [q, q + Vec3::from(jitter) * 0.5] {
             check_k_nearest(&tree, &points, q, k, max_dist2, &mut out);
             check_within(&tree, &points, q, max_dist2.min(50.0), &mut out);
+            check_nearest_where(&tree, &points, q, max_dist2, 0.0);
+            check_nearest_where(&tree, &points, q, max_dist2, 1.0);
         }
     }
 }

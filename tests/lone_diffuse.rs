@@ -13,9 +13,14 @@ use dpm::world::World;
 
 /// A floor under a point light and a mirror ceiling: the floor sees itself in the ceiling.
 fn floor_and_mirror(floor: &str) -> String {
+    floor_and_mirror_at(floor, 32, 24)
+}
+
+fn floor_and_mirror_at(floor: &str, width: u32, height: u32) -> String {
     format!(
         "LookAt 0 1.2 -2.5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 50\n\
-         Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 24\nWorldBegin\n\
+         Film \"image\" \"integer xresolution\" {width} \"integer yresolution\" {height}\n\
+         WorldBegin\n\
          LightSource \"point\" \"point from\" [-0.3 1.5 0] \"rgb I\" [4 4 4]\n\
          AttributeBegin\nMaterial \"matte\" \"rgb Kd\" [0.8 0.8 0.8]\n{floor}AttributeEnd\n\
          AttributeBegin\nMaterial \"mirror\" \"rgb Kr\" [1 1 1]\n\
@@ -37,6 +42,15 @@ fn mean(image: &dpm::image_io::Image) -> f64 {
 
 /// The image mean of `text` rendered by dpm's defaults but for the pass count, plus `extra`.
 fn render_mean(dir: &std::path::Path, name: &str, text: &str, extra: &[&str]) -> f64 {
+    mean(&render(dir, name, text, extra).image)
+}
+
+fn render(
+    dir: &std::path::Path,
+    name: &str,
+    text: &str,
+    extra: &[&str],
+) -> dpm::render::pipeline::RenderOutcome {
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     let out = dir.join(format!("{name}.pfm"));
@@ -44,14 +58,63 @@ fn render_mean(dir: &std::path::Path, name: &str, text: &str, extra: &[&str]) ->
         support::path_str(&path),
         "-o",
         support::path_str(&out),
-        "--threads",
-        "2",
         "--passes",
         "8",
     ];
+    if !extra.contains(&"--threads") {
+        args.extend_from_slice(&["--threads", "2"]);
+    }
     args.extend_from_slice(extra);
-    let outcome = dpm::render::pipeline::run(&support::render_args(&args)).unwrap();
-    mean(&outcome.image)
+    dpm::render::pipeline::run(&support::render_args(&args)).unwrap()
+}
+
+#[test]
+fn a_sparse_shown_map_is_read_through_its_table_and_keeps_the_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // 19,200 pixels over 1,000 photons: sparse enough for the table (more than 16 a photon).
+    let scene = floor_and_mirror_at(WHOLE, 160, 120);
+    let sparse = ["--global-photons", "1000", "--caustic-photons", "0"];
+    let table = render(d, "table.pbrt", &scene, &sparse);
+    let per_hit = render(
+        d,
+        "per-hit.pbrt",
+        &scene,
+        &[&sparse[..], &["--irradiance-stride", "0"]].concat(),
+    );
+    let tabled = |o: &dpm::render::pipeline::RenderOutcome| {
+        o.times
+            .phases
+            .iter()
+            .any(|p| p.name == "precompute irradiance")
+    };
+    assert!(tabled(&table) && !tabled(&per_hit));
+    // Same photons, same eye samples: only the indirect light's reading differs, by about a
+    // tenth of its noise. Without the global map the image is 5% darker (the test above), so
+    // a table that lost or doubled part of it would show.
+    let (a, b) = (mean(&table.image), mean(&per_hit.image));
+    eprintln!("image mean with the table {a:.5}, estimated at every hit {b:.5}");
+    assert!((a / b - 1.0).abs() < 0.003, "{a} vs {b}");
+    assert_ne!(table.image, per_hit.image, "the table was not read");
+    // The table, like the map, is the same on any thread count.
+    let one = render(
+        d,
+        "one-thread.pbrt",
+        &scene,
+        &[&sparse[..], &["--threads", "1"]].concat(),
+    );
+    assert!(
+        one.image == table.image,
+        "1 and 2 threads made different images"
+    );
+    // A dense map (more photons than a sixteenth of the pixels) keeps its own estimate.
+    let dense = render(
+        d,
+        "dense.pbrt",
+        &scene,
+        &["--global-photons", "2000", "--caustic-photons", "0"],
+    );
+    assert!(!tabled(&dense));
 }
 
 #[test]

@@ -8,6 +8,7 @@
 mod support;
 
 use dpm::estimate::Scratch;
+use dpm::estimate::precomputed::ShownIrradiance;
 use dpm::estimate::{KnnEstimate, PrecomputedIrradiance, Query, RadialKernel, RadianceEstimate};
 use dpm::photon::{Photon, PhotonMap};
 use dpm::render::pipeline;
@@ -118,6 +119,84 @@ fn lookups_agree_with_the_full_estimate_and_the_analytic_irradiance() {
         rms_diff < 1.2 * rms_noise && rms_noise < 0.15,
         "lookup − estimate rms {rms_diff}, estimate noise {rms_noise}"
     );
+}
+
+/// `n` photons of power 1/n spread uniformly over the unit square at z = 0, lit from above:
+/// irradiance exactly 1.
+fn uniform_square(n: usize, seed: u64) -> Vec<Photon> {
+    let mut rng = Rng::for_index(seed, Stream::Distribution, 0);
+    let p = 1.0 / n as f32;
+    (0..n)
+        .map(|_| {
+            let (x, y) = rng.next_2d();
+            Photon::new(Vec3::new(x, y, 0.0), Vec3::splat(p), -Vec3::Z, Vec3::Z)
+        })
+        .collect()
+}
+
+#[test]
+fn a_shown_map_table_is_as_unbiased_and_as_noisy_as_the_estimate() {
+    // A small k, where reading each photon's own estimate at the nearest photon would come out
+    // 4.5% low (a random point's nearest photon tends to have a large empty cell around it,
+    // so a low estimate; 9% at k = 10, 0.85% at k = 100).
+    let (n, k) = (20_000, 20);
+    let map = PhotonMap::build(uniform_square(n, 5), n as u64);
+    let estimate = KnnEstimate::new(RadialKernel::Constant, k, None);
+    let table = ShownIrradiance::build(&map, &estimate, &ProgressBar::hidden());
+    assert_eq!(table.len(), n);
+    let mut scratch = Scratch::default();
+    let mut rng = Rng::for_index(6, Stream::Distribution, 0);
+    let (mut looked, mut full, mut answered) = ([0.0f64; 2], [0.0f64; 2], 0usize);
+    let queries = 40_000;
+    for _ in 0..queries {
+        let (x, y) = rng.next_2d();
+        let q = Query {
+            position: Vec3::new(0.1 + 0.8 * x, 0.1 + 0.8 * y, 0.0),
+            normal: Vec3::Z,
+        };
+        let f = estimate.irradiance(&map, &q, &mut scratch).x as f64;
+        full[0] += f;
+        full[1] += (f - 1.0).powi(2);
+        if let Some(e) = table.lookup(&q, &mut scratch) {
+            let e = e.x as f64;
+            looked[0] += e;
+            looked[1] += (e - 1.0).powi(2);
+            answered += 1;
+        }
+    }
+    // A site answers within half its radius, which holds about k/8 sites of its half: inside
+    // the photons most lookups find one in both halves (e^(−2.5) misses one at k = 20).
+    assert!(
+        answered > queries / 2,
+        "{answered} of {queries} lookups answered"
+    );
+    let (mean, full_mean) = (looked[0] / answered as f64, full[0] / queries as f64);
+    let (rms, full_rms) = (
+        (looked[1] / answered as f64).sqrt(),
+        (full[1] / queries as f64).sqrt(),
+    );
+    eprintln!("lookup mean {mean:.4} rms {rms:.4}; estimate mean {full_mean:.4} rms {full_rms:.4}");
+    // Neighbouring queries share sites and photons: the means are good to about 1%.
+    assert!((mean - 1.0).abs() < 0.025, "mean lookup {mean}");
+    assert!((full_mean - 1.0).abs() < 0.025, "mean estimate {full_mean}");
+    // Two half-maps' estimates at k/2, averaged: the noise of the whole map's at k.
+    assert!(
+        rms < 1.25 * full_rms,
+        "lookup rms {rms} vs estimate rms {full_rms}"
+    );
+    // Past the edge of the photons, farther than half a radius from every site, the
+    // table does not answer (the caller runs the estimate, which fades out over a radius).
+    let outside = Query {
+        position: Vec3::new(1.03, 0.5, 0.0),
+        normal: Vec3::Z,
+    };
+    assert_eq!(table.lookup(&outside, &mut scratch), None);
+    // Nor on the far side of the surface.
+    let below = Query {
+        position: Vec3::new(0.5, 0.5, 0.0),
+        normal: -Vec3::Z,
+    };
+    assert_eq!(table.lookup(&below, &mut scratch), None);
 }
 
 const FG: [&str; 10] = [

@@ -136,7 +136,7 @@ impl RadianceEstimate for KnnEstimate {
     }
 
     fn irradiance(&self, map: &PhotonMap, query: &Query, scratch: &mut Scratch) -> Vec3 {
-        self.kernel_sum(map, query, scratch, power_of)
+        self.kernel_sum(map, query, scratch, power_of).0
     }
 
     fn reflected(
@@ -147,25 +147,44 @@ impl RadianceEstimate for KnnEstimate {
         scratch: &mut Scratch,
     ) -> Vec3 {
         self.kernel_sum(map, query, scratch, |p| weighed_power(p, receiver))
+            .0
     }
 }
 
 impl KnnEstimate {
-    /// The kernel-weighted sum of `weigh` over the k nearest agreeing photons, per unit area.
+    /// This estimate with `k` photons instead (`k ≥ 2`).
+    pub fn with_k(self, k: usize) -> Self {
+        Self::new(self.kernel, k, self.max_radius)
+    }
+
+    /// The irradiance estimate and the squared radius it averaged over (0 when it found
+    /// nothing).
+    pub fn irradiance_and_radius2(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        scratch: &mut Scratch,
+    ) -> (Vec3, f32) {
+        self.kernel_sum(map, query, scratch, power_of)
+    }
+
+    /// The kernel-weighted sum of `weigh` over the k nearest agreeing photons, per unit area,
+    /// and the squared radius it used (0: none).
     fn kernel_sum(
         &self,
         map: &PhotonMap,
         query: &Query,
         scratch: &mut Scratch,
         weigh: impl Fn(&PhotonAttributes) -> DVec3,
-    ) -> Vec3 {
+    ) -> (Vec3, f32) {
         let Some(radius2) = self.kth_radius2(map, query.position, scratch) else {
-            return Vec3::ZERO;
+            return (Vec3::ZERO, 0.0);
         };
+        let radius2_f32 = radius2;
         let radius2 = radius2 as f64;
         // Coincident photons give no area to divide by.
         if radius2.is_nan() || radius2 <= 0.0 {
-            return Vec3::ZERO;
+            return (Vec3::ZERO, 0.0);
         }
         // `scratch.second` holds every photon within some R ≥ r_k in the tree's visiting
         // order; those at or beyond r_k weigh nothing (the k-th lies at y = 1, where every
@@ -184,7 +203,7 @@ impl KnnEstimate {
                 sum += kernel.weight(d2) * weigh(photon);
             }
         }
-        to_irradiance(sum / radius2)
+        (to_irradiance(sum / radius2), radius2_f32)
     }
 }
 

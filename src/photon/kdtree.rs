@@ -183,6 +183,28 @@ impl KdTree {
         nearest::k_nearest(self, query, k, max_dist2, offsets, out);
     }
 
+    /// The nearest point with squared distance `<= max_dist2` that `accept(slot, dist2)`
+    /// takes (ties by slot), or `None`. A non-finite query or a negative or NaN `max_dist2`
+    /// finds nothing. One bound that shrinks with every point taken: cheaper than a
+    /// k-nearest query and a scan of its result when most points are taken.
+    pub fn nearest_where(
+        &self,
+        query: Vec3,
+        max_dist2: f32,
+        accept: impl FnMut(u32, f32) -> bool,
+    ) -> Option<Neighbour> {
+        if !query.is_finite() || max_dist2.is_nan() || max_dist2 < 0.0 || self.is_empty() {
+            return None;
+        }
+        let (mut offsets, root_dist2) = self.root_offsets(query);
+        if root_dist2 > max_dist2 {
+            return None;
+        }
+        let mut search = nearest::NearestWhere::new(query, max_dist2, accept);
+        self.descend(1, &mut offsets, &mut search);
+        search.best()
+    }
+
     /// Every point with squared distance `<= radius2`, in no particular order.
     pub fn within_radius(&self, query: Vec3, radius2: f32, out: &mut Neighbours) {
         out.clear();

@@ -107,13 +107,17 @@ impl Integrator<'_> {
     ) -> Vec3 {
         match (&self.indirect, reception) {
             (Indirect::None, _) => Vec3::ZERO,
-            // Shown directly, the map keeps its own estimate: one per eye hit costs little
-            // beside R gather rays, and the nearest precomputed point's piecewise-constant
-            // cells would be seen as such.
-            (Indirect::Visualize(g), Reception::Lambert(reflectance)) => {
-                *reflectance * (g.estimate.irradiance(g.map, query, scratch) * FRAC_1_PI)
+            // Shown directly, a dense map keeps its own estimate: the nearest table point's
+            // piecewise-constant cells would be seen as such. A sparse one is read through
+            // its table of every photon, whose cells are smaller than its estimate's noise
+            // (see `estimate::precomputed`).
+            (Indirect::Visualize { map: g, table }, Reception::Lambert(reflectance)) => {
+                let e = table
+                    .and_then(|t| t.lookup(query, scratch))
+                    .unwrap_or_else(|| g.estimate.irradiance(g.map, query, scratch));
+                *reflectance * (e * FRAC_1_PI)
             }
-            (Indirect::Visualize(g), glossy) => g.reflected(glossy, query, scratch),
+            (Indirect::Visualize { map: g, .. }, glossy) => g.reflected(glossy, query, scratch),
             (
                 Indirect::FinalGather {
                     map,

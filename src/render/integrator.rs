@@ -8,6 +8,7 @@
 
 use super::gather::Reception;
 use crate::bsdf::Part;
+use crate::estimate::precomputed::ShownIrradiance;
 use crate::estimate::{PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
@@ -79,8 +80,12 @@ pub struct EstimatedMap<'a> {
 #[derive(Clone, Copy)]
 pub enum Indirect<'a> {
     None,
-    /// The global map's estimate at the eye ray's diffuse hit (it holds indirect photons only).
-    Visualize(EstimatedMap<'a>),
+    /// The global map's estimate at the eye ray's diffuse hit (it holds indirect photons only),
+    /// read through `table` at Lambertian hits where the map is sparse.
+    Visualize {
+        map: EstimatedMap<'a>,
+        table: Option<&'a ShownIrradiance>,
+    },
     /// `rays` cosine-distributed gather rays, each reading the global map (which then holds
     /// every diffuse photon) where it lands: the nearest agreeing point of `precomputed` when
     /// there is one, else the map's estimate.

@@ -26,7 +26,9 @@ use super::schedule::{Schedule, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::diffusion::shaped::ShapedBy;
 use crate::estimate::kernel::RadialKernel;
-use crate::estimate::precomputed::PrecomputedIrradiance;
+use crate::estimate::precomputed::{
+    PrecomputedIrradiance, SHOWN_TABLE_QUERIES_PER_PHOTON, ShownIrradiance,
+};
 use crate::estimate::settings::k_equivalent_radius;
 use crate::estimate::{
     DiffusionEstimate, EstimateError, EstimatorSettings, Query, RadianceEstimate,
@@ -239,6 +241,13 @@ pub struct PassReport {
     pub caustic_bytes_per_photon: Option<f64>,
 }
 
+/// The tables a pass's global map is read through (see [`PassContext::irradiance_tables`]).
+#[derive(Default)]
+struct IrradianceTables {
+    gather: Option<PrecomputedIrradiance>,
+    shown: Option<ShownIrradiance>,
+}
+
 /// Everything a pass needs besides its maps.
 pub struct PassContext<'a> {
     pub world: &'a World,
@@ -335,35 +344,15 @@ impl PassContext<'_> {
             estimate.prepare(map);
         }
         let global_estimate = global_estimate(self.settings, &self.radii, &self.schedule, pass);
-        let precomputed = match &global {
-            Some((map, _))
-                if !map.is_empty()
-                    && self.settings.final_gather > 0
-                    && self.settings.irradiance_stride > 0 =>
-            {
-                let stride = self.settings.irradiance_stride;
-                let bar = progress(map.len().div_ceil(stride) as u64, "precompute irradiance");
-                let start = Instant::now();
-                // Lookups search as far as the estimate itself may reach: pass 0's
-                // k-equivalent radius, shrinking with the passes like the estimate's cap.
-                let reach = self
-                    .radii
-                    .global
-                    .map(|r| r * self.schedule.radius_scale(pass));
-                let table =
-                    PrecomputedIrradiance::build(map, &global_estimate, stride, reach, &bar);
-                bar.finish_and_clear();
-                times.accumulate(
-                    "precompute irradiance",
-                    start.elapsed(),
-                    &[("points", table.len() as u64)],
-                );
+        let tables = match &global {
+            Some((map, _)) if !map.is_empty() => {
+                let tables = self.irradiance_tables(map, &global_estimate, pass, times);
                 if crate::interrupt::requested() {
                     return Ok(None);
                 }
-                Some(table)
+                tables
             }
-            _ => None,
+            _ => IrradianceTables::default(),
         };
         let integrator = Integrator {
             world: self.world,
@@ -381,11 +370,14 @@ impl PassContext<'_> {
                         estimate: &global_estimate,
                     };
                     match self.settings.final_gather {
-                        0 => Indirect::Visualize(m),
+                        0 => Indirect::Visualize {
+                            map: m,
+                            table: tables.shown.as_ref(),
+                        },
                         rays => Indirect::FinalGather {
                             map: m,
                             rays,
-                            precomputed: precomputed.as_ref(),
+                            precomputed: tables.gather.as_ref(),
                         },
                     }
                 }
@@ -437,6 +429,59 @@ impl PassContext<'_> {
             estimator,
             caustic_bytes_per_photon: caustic.as_ref().map(|(m, _)| m.bytes_per_photon()),
         }))
+    }
+
+    /// The irradiance tables of the pass's global map, if it is read through one (none with
+    /// `--irradiance-stride 0`): for final gathering at one photon in the stride
+    /// (Christensen's), and for a map shown directly a [`ShownIrradiance`] when the map is
+    /// sparse, the eye pass making more than [`SHOWN_TABLE_QUERIES_PER_PHOTON`] estimates a
+    /// photon. The choice depends only on the map and the image size, so a pass makes the
+    /// same image wherever it runs.
+    fn irradiance_tables(
+        &self,
+        map: &PhotonMap,
+        estimate: &KnnEstimate,
+        pass: u64,
+        times: &mut PhaseTimes,
+    ) -> IrradianceTables {
+        let stride = self.settings.irradiance_stride;
+        let pixels = self.camera.width() * self.camera.height();
+        let mut tables = IrradianceTables::default();
+        let count = if stride == 0 {
+            return tables;
+        } else if self.settings.final_gather > 0 {
+            map.len().div_ceil(stride)
+        } else if map.len() * SHOWN_TABLE_QUERIES_PER_PHOTON < pixels {
+            map.len()
+        } else {
+            return tables;
+        };
+        let bar = progress(count as u64, "precompute irradiance");
+        let start = Instant::now();
+        let points = if self.settings.final_gather > 0 {
+            // Lookups search as far as the estimate itself may reach: pass 0's k-equivalent
+            // radius, shrinking with the passes like the estimate's cap.
+            let reach = self
+                .radii
+                .global
+                .map(|r| r * self.schedule.radius_scale(pass));
+            let table = PrecomputedIrradiance::build(map, estimate, stride, reach, &bar);
+            let points = table.len();
+            tables.gather = Some(table);
+            points
+        } else {
+            let table = ShownIrradiance::build(map, estimate, &bar);
+            let points = table.len();
+            tables.shown = Some(table);
+            points
+        };
+        bar.finish_and_clear();
+        times.accumulate(
+            "precompute irradiance",
+            start.elapsed(),
+            &[("points", points as u64)],
+        );
+        tables
     }
 }
 

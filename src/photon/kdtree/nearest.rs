@@ -152,6 +152,56 @@ impl Search for Buffer<'_> {
     }
 }
 
+/// The nearest collector with a predicate: the best `(dist2, slot)` taken so far bounds the
+/// search.
+pub(super) struct NearestWhere<F> {
+    query: Vec3,
+    bound: f32,
+    best: Option<u64>,
+    accept: F,
+}
+
+impl<F: FnMut(u32, f32) -> bool> NearestWhere<F> {
+    pub(super) fn new(query: Vec3, max_dist2: f32, accept: F) -> Self {
+        Self {
+            query,
+            bound: max_dist2,
+            best: None,
+            accept,
+        }
+    }
+
+    pub(super) fn best(&self) -> Option<Neighbour> {
+        self.best.map(unpack)
+    }
+}
+
+impl<F: FnMut(u32, f32) -> bool> Search for NearestWhere<F> {
+    #[inline(always)]
+    fn query(&self) -> Vec3 {
+        self.query
+    }
+    #[inline(always)]
+    fn bound(&self) -> f32 {
+        self.bound
+    }
+    #[inline(always)]
+    fn scan(&mut self, leaf: Leaf<'_>) {
+        let mut dist2 = [0.0; LEAF_SIZE];
+        for (slot, &d2) in (leaf.first_slot..).zip(leaf.dist2(self.query, &mut dist2)) {
+            // Cells at the bound are still visited, so a tie with a lower slot is found.
+            if d2 > self.bound {
+                continue;
+            }
+            let key = pack(d2, slot);
+            if self.best.is_none_or(|b| key < b) && (self.accept)(slot, d2) {
+                self.best = Some(key);
+                self.bound = d2;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
