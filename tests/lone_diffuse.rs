@@ -4,6 +4,9 @@
 //! by twins: the floor in one piece renders as the floor cut in two (two diffuse objects,
 //! whose global map has always been built, drawn by the cosine alone); and aimed bounces
 //! store the same flux as cosine-drawn ones, and so does a map cut short by a path limit.
+//! Where the floor cannot light itself (a mirror standing upright on it) pass 0's map, traced
+//! once, stores nothing and no pass traces one, which changes no byte of the image; where the
+//! map is sparse it is read through its table and keeps the image's mean.
 
 mod support;
 
@@ -27,6 +30,20 @@ fn floor_and_mirror_at(floor: &str, width: u32, height: u32) -> String {
          Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
          \"point P\" [-1.5 2 -1.5  1.5 2 -1.5  1.5 2 1.5  -1.5 2 1.5]\nAttributeEnd\n"
     )
+}
+
+/// A floor with a mirror standing upright on it: a vertical mirror keeps a ray's upward slope,
+/// so light leaving the floor never comes back to it.
+fn floor_and_standing_mirror() -> String {
+    "LookAt 0 1.2 -2.5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 50\n\
+     Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 24\nWorldBegin\n\
+     LightSource \"point\" \"point from\" [-0.3 1.5 -0.5] \"rgb I\" [4 4 4]\n\
+     AttributeBegin\nMaterial \"matte\" \"rgb Kd\" [0.8 0.8 0.8]\n"
+        .to_string()
+        + WHOLE
+        + "AttributeEnd\nAttributeBegin\nMaterial \"mirror\" \"rgb Kr\" [1 1 1]\n\
+     Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+     \"point P\" [-0.8 0 0.3  0.8 0 0.3  0.8 0.6 0.3  -0.8 0.6 0.3]\nAttributeEnd\n"
 }
 
 const WHOLE: &str = "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
@@ -139,6 +156,38 @@ fn a_lone_floor_lights_itself_through_a_mirror_as_a_floor_in_two_pieces_does() {
     assert!((one / two - 1.0).abs() < 0.01, "{one} vs {two}");
     // The light the floor sends itself is a share worth checking for.
     assert!(one / none > 1.05, "{one} vs {none}");
+}
+
+fn phase<'a>(
+    outcome: &'a dpm::render::pipeline::RenderOutcome,
+    name: &str,
+) -> Option<&'a dpm::timing::Phase> {
+    outcome.times.phases.iter().find(|p| p.name == name)
+}
+
+#[test]
+fn a_lone_floor_that_cannot_light_itself_traces_no_global_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let standing = render(d, "standing.pbrt", &floor_and_standing_mirror(), &[]);
+    let probe = phase(&standing, "probe global map").expect("a lone floor is probed");
+    assert!(probe.counts.iter().any(|(k, v)| k == "stored" && *v == 0));
+    assert!(phase(&standing, "trace global photons").is_none());
+    // Traced every pass all the same, the empty map changes nothing: the same bytes.
+    let traced = render(
+        d,
+        "traced.pbrt",
+        &floor_and_standing_mirror(),
+        &["--global-photons", "10000", "--global-paths", "100000"],
+    );
+    assert!(phase(&traced, "probe global map").is_none());
+    let global = phase(&traced, "trace global photons").expect("given, it is traced");
+    assert!(global.counts.iter().any(|(k, v)| k == "stored" && *v == 0));
+    assert!(standing.image == traced.image, "the images differ");
+    // Under a mirror ceiling the floor does light itself: the probe finds photons and every
+    // pass traces its map.
+    let ceiling = render(d, "ceiling.pbrt", &floor_and_mirror(WHOLE), &[]);
+    assert!(phase(&ceiling, "trace global photons").is_some());
 }
 
 #[test]

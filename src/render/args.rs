@@ -131,8 +131,9 @@ pub struct RenderArgs {
     ///
     /// Default: 300000 when the scene has two or more diffuse objects (so diffuse light can
     /// bounce between them); 10000 when it has one and mirrors or glass (its light comes back
-    /// to it through them: a dim share, each photon of which costs many paths); else 0 (no
-    /// global map: a lone plane cannot light itself).
+    /// to it through them: a dim share, each photon of which costs many paths), or 0 when pass
+    /// 0's map, traced once before the passes, stores nothing (a floor under an upright mirror
+    /// cannot light itself); else 0 (no global map: a lone plane cannot light itself).
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           help_heading = headings::PHOTONS)]
     pub global_photons: Option<usize>,

@@ -3,7 +3,8 @@
 //! start (pass 0, `--first-pass`, or the end of a `--resume`d film, with pass 0's base radii),
 //! and the pixel plan of the pilot rays. Owns those decisions; the passes themselves are
 //! [`super::pass_loop`]'s, and nothing here traces photons except the pass-0 maps a late start
-//! needs for its radii.
+//! needs for its radii and pass 0's global map where a lone diffuse object may not light
+//! itself at all.
 
 use super::args::{
     DEFAULT_GLOBAL_PHOTONS, DEFAULT_LONE_GLOBAL_PATHS, DEFAULT_LONE_GLOBAL_PHOTONS,
@@ -94,7 +95,8 @@ impl Wiring {
         output: &Path,
         times: &mut PhaseTimes,
     ) -> Result<Self, RenderError> {
-        let settings = render_settings(args, world);
+        let mut settings = render_settings(args, world);
+        drop_an_empty_lone_global_map(&mut settings, args, world, times);
         super::caustic_guide::learn(world, &settings, args.seed, times);
         let wanted = wanted_maps(&settings, world);
         check_memory(&settings.estimator, world, &wanted)?;
@@ -186,6 +188,50 @@ pub struct Start {
     pub film: Option<Film>,
     pub first: u64,
     pub radii: Option<BaseRadii>,
+}
+
+/// Drops the default global map of a lone diffuse object that does not light itself: when
+/// pass 0's map, traced here, stores nothing from its paths, no pass traces one. A floor
+/// under a standing chrome ring is such a case: a vertical mirror keeps a ray's upward slope,
+/// so light leaving the floor never comes back to it, and the ring's 100,000 global paths a
+/// pass stored nothing for 4% of its pass. The trace is pass 0's own (the same seed), so the
+/// decision is the same on every machine, and dropping a map that stays empty changes no
+/// pass's image (the caustic photons and camera samples have streams of their own). A map
+/// given by `--global-photons` is always traced.
+fn drop_an_empty_lone_global_map(
+    settings: &mut RenderSettings,
+    args: &RenderArgs,
+    world: &World,
+    times: &mut PhaseTimes,
+) {
+    let lone = world.diffuse_objects() == 1 && world.has_specular();
+    if !lone || args.global_photons.is_some() || settings.global_photons == 0 {
+        return;
+    }
+    let start = std::time::Instant::now();
+    let seed = Schedule::new(settings.alpha, args.seed).seed(0);
+    let kind = MapKind::Global {
+        with_direct: settings.final_gather > 0,
+    };
+    let paths = (settings.global_paths > 0).then_some(settings.global_paths);
+    let bar = indicatif::ProgressBar::hidden();
+    let (_, counts) = crate::photon::tracer::trace_map_within(
+        world,
+        kind,
+        settings.global_photons,
+        paths,
+        seed,
+        &bar,
+    );
+    times.record(
+        "probe global map",
+        start.elapsed(),
+        &[("emitted", counts.emitted), ("stored", counts.stored)],
+    );
+    if counts.stored == 0 {
+        settings.global_photons = 0;
+        settings.global_paths = 0;
+    }
 }
 
 /// The settings every pass of this render uses.
