@@ -6,7 +6,8 @@
 //! draws and at which radii); each pass ([`pass`]) traces its own photon maps (or reads pass
 //! 0's from a file, [`photon_files`]), prepares its estimates, shades fresh camera samples
 //! ([`camera`]) through the [`integrator`], with the light seen along mirror and glass chains
-//! sampled apart in the pixels that need it ([`emission`]), and drops its maps; the [`film`]
+//! sampled apart in the pixels that need it ([`emission`]) and, for the kernel-field layer, the
+//! diffusion kernel's shape at each pixel ([`kernel_probe`]), and drops its maps; the [`film`]
 //! accumulates the passes' images and is what gets written ([`output`], [`film_file`]) and
 //! merged ([`merge`]). Owns pixels, sample placement and accumulation; must not parse scenes
 //! or store photons.
@@ -20,6 +21,7 @@ pub mod film;
 pub mod film_file;
 mod gather;
 pub mod integrator;
+pub mod kernel_probe;
 pub mod memory_budget;
 pub mod merge;
 pub mod output;

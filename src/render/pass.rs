@@ -1,8 +1,9 @@
 //! One pass of a progressive render, start to end: trace this pass's photon maps from its own
 //! random streams, resolve the estimates at this pass's radii (the diffusion estimate's
-//! gradient pass timed as its own phase, and so is the precomputed irradiance a final gather
-//! reads), shade fresh pixel samples into a [`PassImage`], and drop the maps. A pass depends only on the scene, the [`RenderSettings`], the base radii,
-//! the seed and its index, so any pass can run anywhere and in any order. Owns the per-pass
+//! gradient pass timed as its own phase, and so are the irradiance tables a final gather or a
+//! sparse shown global map reads), shade fresh pixel samples into a [`PassImage`], and drop
+//! the maps. A pass depends only on the scene, the [`RenderSettings`], the base radii, the
+//! seed and its index, so any pass can run anywhere and in any order. Owns the per-pass
 //! wiring; must not accumulate passes (the [`super::film`] does) or read the command line.
 //!
 //! Progressive radii. Pass `i` scales every radius by [`Schedule::radius_scale`]: the
@@ -21,6 +22,7 @@ use super::emission::emitted_mean;
 use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
 use super::integrator::Emission;
 use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
+use super::kernel_probe::KernelProbe;
 use super::pilots::PixelPlan;
 use super::schedule::{Schedule, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
@@ -31,15 +33,13 @@ use crate::estimate::precomputed::{
 };
 use crate::estimate::settings::k_equivalent_radius;
 use crate::estimate::{
-    DiffusionEstimate, EstimateError, EstimatorSettings, Query, RadianceEstimate,
-    ResolvedEstimator, Scratch,
+    EstimateError, EstimatorSettings, RadianceEstimate, ResolvedEstimator, Scratch,
 };
 use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, TraceCounts, trace_map_within};
 use crate::sampling::PathSampler;
 use crate::timing::{PhaseTimes, progress};
-use crate::world::{Surface, World};
-use glam::Vec3;
+use crate::world::World;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -482,45 +482,6 @@ impl PassContext<'_> {
             &[("points", points as u64)],
         );
         tables
-    }
-}
-
-/// The diffusion kernel's shape where a pixel's centre ray first meets a diffuse surface.
-pub struct KernelProbe<'a> {
-    pub world: &'a World,
-    pub map: &'a PhotonMap,
-    pub estimate: &'a DiffusionEstimate,
-}
-
-impl KernelProbe<'_> {
-    /// (λ2, (1 − λ2) cos 2θ, (1 − λ2) sin 2θ, λ1) with θ the edge direction's angle in the
-    /// surface's tangent frame; a round kernel (1, 0, 0, 1) where nothing diffuse is hit.
-    pub fn channels(&self, origin: Vec3, dir: Vec3, scratch: &mut Scratch) -> [f32; 4] {
-        const ROUND: [f32; 4] = [1.0, 0.0, 0.0, 1.0];
-        let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-            return ROUND;
-        };
-        let Surface::Material(m) = hit.surface else {
-            return ROUND;
-        };
-        if !self.world.reads_photons(m) {
-            return ROUND;
-        }
-        let (_, n) = hit.facing(dir);
-        let query = Query {
-            position: hit.position,
-            normal: n,
-        };
-        let shape = self.estimate.kernel_at(self.map, &query, scratch);
-        let (t, b) = crate::sampling::basis(n);
-        let theta = shape.x1.dot(b).atan2(shape.x1.dot(t));
-        let w = 1.0 - shape.lambda2;
-        [
-            shape.lambda2,
-            w * (2.0 * theta).cos(),
-            w * (2.0 * theta).sin(),
-            shape.lambda1,
-        ]
     }
 }
 
