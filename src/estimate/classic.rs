@@ -177,11 +177,10 @@ impl KnnEstimate {
         scratch: &mut Scratch,
         weigh: impl Fn(&PhotonAttributes) -> DVec3,
     ) -> (Vec3, f32) {
-        let Some(radius2) = self.kth_radius2(map, query.position, scratch) else {
+        let Some(found2) = self.kth_radius2(map, query.position, scratch) else {
             return (Vec3::ZERO, 0.0);
         };
-        let radius2_f32 = radius2;
-        let radius2 = radius2 as f64;
+        let radius2 = found2 as f64;
         // Coincident photons give no area to divide by.
         if radius2.is_nan() || radius2 <= 0.0 {
             return (Vec3::ZERO, 0.0);
@@ -203,7 +202,7 @@ impl KnnEstimate {
                 sum += kernel.weight(d2) * weigh(photon);
             }
         }
-        (to_irradiance(sum / radius2), radius2_f32)
+        (to_irradiance(sum / radius2), found2)
     }
 }
 

@@ -12,9 +12,9 @@
 //! leaf follows the build's partitioning, which a rounding difference reshuffles (the same
 //! scene at another scale picked another subset, a 5–7% different image), while the tracing
 //! index is the same for the same photons, and a map saved and loaded keeps it. Each value
-//! depends only on the map, the estimate and the photon (the k-NN estimate is the same on any thread; see
-//! [`super::classic`]), and the values are collected in slot order, so the table, and every
-//! image made with it, is the same whatever the thread count.
+//! depends only on the map, the estimate and the photon (the k-NN estimate is the same on any
+//! thread; see [`super::classic`]), and the values are collected in slot order, so the table,
+//! and every image made with it, is the same whatever the thread count.
 //!
 //! Lookup: the nearest of the [`LOOKUP_K`] nearest points within the search radius whose normal
 //! agrees with the query's (`n_i · n ≥` [`NORMAL_AGREEMENT_MIN_COS`], the rule every estimate

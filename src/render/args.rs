@@ -252,7 +252,7 @@ pub struct RenderArgs {
     /// Christensen's precomputed irradiance: once per pass at one photon in N of the global
     /// map, and a gather ray reads the nearest such point whose normal agrees instead of
     /// running its own estimate. Without final gathering, a sparse global map (more than 16
-    /// pixels a photon) is read through a table of every photon. 0 runs a k-NN estimate per
+    /// pixels a photon) is read through a table of its photons. 0 runs a k-NN estimate per
     /// gather ray or eye hit.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_STRIDE, allow_negative_numbers = true,
           help_heading = headings::EYE, hide_short_help = true)]

@@ -109,8 +109,8 @@ impl Integrator<'_> {
             (Indirect::None, _) => Vec3::ZERO,
             // Shown directly, a dense map keeps its own estimate: the nearest table point's
             // piecewise-constant cells would be seen as such. A sparse one is read through
-            // its table of every photon, whose cells are smaller than its estimate's noise
-            // (see `estimate::precomputed`).
+            // its split table, whose cells are smaller than its estimate's noise (see
+            // `estimate::precomputed::ShownIrradiance`).
             (Indirect::Visualize { map: g, table }, Reception::Lambert(reflectance)) => {
                 let e = table
                     .and_then(|t| t.lookup(query, scratch))

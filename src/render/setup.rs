@@ -204,8 +204,8 @@ fn drop_an_empty_lone_global_map(
     world: &World,
     times: &mut PhaseTimes,
 ) {
-    let lone = world.diffuse_objects() == 1 && world.has_specular();
-    if !lone || args.global_photons.is_some() || settings.global_photons == 0 {
+    if !world.lights_itself_alone() || args.global_photons.is_some() || settings.global_photons == 0
+    {
         return;
     }
     let start = std::time::Instant::now();
@@ -237,7 +237,7 @@ fn drop_an_empty_lone_global_map(
 /// The settings every pass of this render uses.
 fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let diffuse_objects = world.diffuse_objects();
-    let lone = diffuse_objects == 1 && world.has_specular();
+    let lone = world.lights_itself_alone();
     RenderSettings {
         caustic_photons: args.caustic_photons,
         // Diffuse light bounces between two diffuse objects, or from one back to itself

@@ -379,7 +379,7 @@ impl World {
             glossy_min_alpha,
             diffuse_bounce_aim: 0.0,
         };
-        if world.diffuse_objects() == 1 && world.has_specular() {
+        if world.lights_itself_alone() {
             world.diffuse_bounce_aim = LONE_DIFFUSE_BOUNCE_AIM;
         }
         Ok(world)
@@ -494,6 +494,12 @@ impl World {
     /// environment).
     pub fn has_sky_map(&self) -> bool {
         !self.sky_maps.is_empty()
+    }
+
+    /// Whether the scene's one diffuse object can only light itself through its mirrors,
+    /// glass and glossy surfaces (a floor under a glass): its global map is a lone object's.
+    pub fn lights_itself_alone(&self) -> bool {
+        self.diffuse_objects() == 1 && self.has_specular()
     }
 
     /// Whether any object is a mirror, glass or glossy (so caustic photons exist) and some
