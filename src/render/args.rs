@@ -112,12 +112,16 @@ pub struct RenderArgs {
           help_heading = headings::PASSES, hide_short_help = true)]
     pub ppm_alpha: f64,
 
-    /// Rewrite -o (and --film) at most every this many seconds (0: after every pass).
+    /// Rewrite -o (and --film) at most every this many seconds (0: after every pass)
+    /// [default: after pass 0, then whenever writing has cost at most 2% of the time since].
     ///
-    /// The last pass is always written.
-    #[arg(long, value_name = "SECONDS", default_value_t = 0.0, allow_negative_numbers = true,
+    /// The last pass is always written, and so are the complete passes of an interrupted
+    /// render. By default a rewrite waits until 50 times what the previous one took has
+    /// passed: a caustic-glass EXR with its layers takes about 45 ms, and rewritten after
+    /// every one-second pass it took 6% of a 30 s render.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true,
           help_heading = headings::PASSES, hide_short_help = true)]
-    pub write_every: f64,
+    pub write_every: Option<f64>,
 
     /// Photons stored in each pass's caustic map (0: no caustics).
     ///

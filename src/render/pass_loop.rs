@@ -3,9 +3,10 @@
 //! mean of this run's pass times, would overrun the budget is not started, though the first
 //! always runs), with a progress bar over the passes, each pass's line in the report (its time
 //! and, with `--reference`, the film's error after it), and `-o`/`--film` rewritten as passes
-//! complete (at most every `--write-every` seconds; the last write is the caller's). Ctrl-C ends
-//! the pass in flight unfinished; the film keeps the complete ones. Owns the order of passes
-//! and when they are written; must not decide what a pass computes.
+//! complete (after pass 0, then as often as costs at most 2% of the render, or every
+//! `--write-every` seconds; the last write is the caller's). Ctrl-C ends the pass in flight
+//! unfinished; the film keeps the complete ones. Owns the order of passes and when they are
+//! written; must not decide what a pass computes.
 
 use super::args::RenderArgs;
 use super::camera::RayCamera;
@@ -68,7 +69,7 @@ impl PassLoop<'_> {
         };
         let last = (first + self.pass_limit()).min(MAX_PASSES);
         let bar = self.bar(first, last);
-        let mut last_write: Option<Instant> = None;
+        let mut last_write: Option<LastWrite> = None;
         let settings = &self.wiring.settings;
         let mut history = TensorHistory::new(
             match settings.estimator.estimator {
@@ -153,11 +154,14 @@ impl PassLoop<'_> {
                 None => bar.inc(1),
             }
             bar.set_message(pass_message(film, &out.records, &out.last_report));
-            let due =
-                last_write.is_none_or(|t| t.elapsed() >= Duration::from_secs_f64(args.write_every));
-            if due && pass + 1 < last {
+            let since = last_write.map(|w| (w.end.elapsed(), w.took));
+            if pass + 1 < last && write_due(args.write_every, since) {
+                let start = Instant::now();
                 write_outputs(args, self.output, self.film_path.as_deref(), film, times)?;
-                last_write = Some(Instant::now());
+                last_write = Some(LastWrite {
+                    end: Instant::now(),
+                    took: start.elapsed(),
+                });
             }
         }
         bar.finish_and_clear();
@@ -200,6 +204,31 @@ impl PassLoop<'_> {
     }
 }
 
+/// When the outputs were last rewritten, and what that took.
+#[derive(Clone, Copy)]
+struct LastWrite {
+    end: Instant,
+    took: Duration,
+}
+
+/// By default a rewrite waits this many times what the last one took: writing costs at most
+/// 1/50 of the render.
+pub const WRITE_COST_RATIO: u32 = 50;
+
+/// Whether the outputs are due a rewrite after a pass, given `--write-every` and the time
+/// since the last rewrite with what it took (`None`: none yet this run, which is always due).
+/// Every `--write-every` seconds where it is given, else once [`WRITE_COST_RATIO`] times the
+/// last rewrite has passed.
+pub fn write_due(every: Option<f64>, since_last: Option<(Duration, Duration)>) -> bool {
+    let Some((since, took)) = since_last else {
+        return true;
+    };
+    match every {
+        Some(seconds) => since >= Duration::from_secs_f64(seconds),
+        None => since >= took * WRITE_COST_RATIO,
+    }
+}
+
 /// The pass bar's message: passes held, photons so far, the error so far.
 fn pass_message(film: &Film, records: &[PassRecord], last: &Option<PassReport>) -> String {
     let per_pass = last.as_ref().map_or(0, |r| {
@@ -211,4 +240,33 @@ fn pass_message(film: &Film, records: &[PassRecord], last: &Option<PassReport>) 
         m += &format!(", rel. MSE {e:.3e}");
     }
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ms(v: u64) -> Duration {
+        Duration::from_millis(v)
+    }
+
+    #[test]
+    fn by_default_a_rewrite_waits_fifty_times_what_the_last_took() {
+        assert!(write_due(None, None), "the first pass is always written");
+        assert!(!write_due(None, Some((ms(499), ms(10)))));
+        assert!(write_due(None, Some((ms(500), ms(10)))));
+        // A write that takes nothing measurable leaves every pass written.
+        assert!(write_due(None, Some((ms(0), ms(0)))));
+    }
+
+    #[test]
+    fn write_every_counts_seconds_whatever_a_write_took() {
+        assert!(
+            write_due(Some(0.0), Some((ms(0), ms(900)))),
+            "0: after every pass"
+        );
+        assert!(!write_due(Some(2.0), Some((ms(1_999), ms(1)))));
+        assert!(write_due(Some(2.0), Some((ms(2_000), ms(1)))));
+        assert!(write_due(Some(2.0), None));
+    }
 }

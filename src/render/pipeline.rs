@@ -146,10 +146,9 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
     if let Some(t) = args.time.filter(|t| !(t.is_finite() && *t > 0.0)) {
         return invalid(format!("--time {t}: must be a positive number of seconds"));
     }
-    if !(args.write_every.is_finite() && args.write_every >= 0.0) {
+    if let Some(s) = args.write_every.filter(|s| !(s.is_finite() && *s >= 0.0)) {
         return invalid(format!(
-            "--write-every {}: must be zero or a positive number of seconds",
-            args.write_every
+            "--write-every {s}: must be zero or a positive number of seconds"
         ));
     }
     if !(args.glossy_min_alpha >= 0.0 && args.glossy_min_alpha.is_finite()) {
