@@ -186,11 +186,11 @@ pub struct EstimatorFlags {
     /// Which photons of the tensor history shape the kernels: one pass's worth, or all.
     ///
     /// `one-pass` keeps one photon in N of each of the N earlier passes (more of the first
-    /// ones, which shape the passes right after them with fewer beside them): the shapes cost
-    /// about what a pass's own would and are independent of the photons they spread, which
-    /// keeps a caustic's energy, and the history holds about one pass's photons. `all` shapes
+    /// ones, which shape the passes right after them with fewer beside them; each pass shapes
+    /// on one pass's photons of them): the shapes cost about what a pass's own would and are
+    /// independent of the photons they spread, which keeps a caustic's energy. `all` shapes
     /// on every photon of the N passes: steadier gradients, sharper faint edges (the
-    /// constructed distribution's edge error after 16 passes 0.84× instead of 0.97×), at N
+    /// constructed distribution's edge error after 16 passes 0.84× instead of 0.99×), at N
     /// times the gradient pass and the tensor's scan per pixel, which over a few seconds costs
     /// more than it gains on the torus knot and the metal ring (BENCHMARKS.md, "A structure
     /// tensor across passes").

@@ -64,27 +64,51 @@ impl HistoryPhotons {
 
 /// The map that shapes a pass's kernels, from what a history of `depth` passes kept of the
 /// earlier ones (`(pass, photons)` as [`HistoryPhotons::kept`] kept them): its density is one
-/// pass's, each kept photon's power scaled by the photons it stands for over the number of
-/// passes. `None` when there is no earlier pass.
+/// pass's. For all, every kept photon at `1/n` of its power (`n` passes). For one pass's
+/// worth, each of the `n` passes gives `1/n` of its photons at their own power: the first
+/// passes kept more (pass 0 all of its photons, for pass 1), and only the share the window
+/// needs is taken, evenly through what was kept, so that a pass's history holds one pass's
+/// photons (and costs one pass's gradient pass) from pass 1 on, not up to twice as many.
+/// `None` when there is no earlier pass.
 pub fn history_map(
     kept: &[(u64, &[Photon])],
     depth: u64,
     photons: HistoryPhotons,
 ) -> Option<PhotonMap> {
-    let n = kept.len() as f32;
     if kept.is_empty() {
         return None;
     }
-    let map: Vec<Photon> = (kept.iter())
-        .flat_map(|&(pass, kept)| {
-            let scale = photons.stride(pass, depth) as f32 / n;
-            kept.iter().map(move |p| {
-                Photon::new(p.position(), p.power() * scale, p.direction(), p.normal())
+    let n = kept.len() as u64;
+    let map: Vec<Photon> = match photons {
+        HistoryPhotons::All => {
+            let scale = 1.0 / n as f32;
+            (kept.iter())
+                .flat_map(|&(_, kept)| kept.iter())
+                .map(|p| Photon::new(p.position(), p.power() * scale, p.direction(), p.normal()))
+                .collect()
+        }
+        HistoryPhotons::OnePass => (kept.iter())
+            .flat_map(|&(pass, kept)| {
+                // Pass `pass` kept one photon in `stride`; the window wants one in `n`.
+                let stride = photons.stride(pass, depth);
+                evenly(kept, stride, n).copied()
             })
-        })
-        .collect();
+            .collect(),
+    };
     let emitted = map.len() as u64;
     Some(PhotonMap::build(map, emitted))
+}
+
+/// `stride/n` of `items` (`stride ≤ n`), evenly spread: item `m` is taken where
+/// `⌊(m + 1)·stride/n⌋` steps past `⌊m·stride/n⌋`.
+fn evenly<T>(items: &[T], stride: u64, n: u64) -> impl Iterator<Item = &T> {
+    debug_assert!(
+        stride <= n,
+        "a pass kept fewer photons than its window takes"
+    );
+    (items.iter().enumerate())
+        .filter(move |&(m, _)| ((m as u64 + 1) * stride) / n > (m as u64 * stride) / n)
+        .map(|(_, item)| item)
 }
 
 /// Gives a map that [`ShapedBy`] sums its leaf sums (powers, leaf normals and moments, no
@@ -239,9 +263,18 @@ mod tests {
                 kept.iter().map(|(p, k)| (*p, k.as_slice())).collect();
             // Pass 1 is shaped by pass 0, pass 3 by passes 0-2, pass 12 by passes 8-11 (four
             // passes of the same photons: one-pass strata cover every slot once).
-            for earlier in [&slices[..1], &slices[..3], &slices[8..12]] {
+            for earlier in [&slices[..1], &slices[..3], &slices[..4], &slices[8..12]] {
                 let map = history_map(earlier, 4, history).unwrap();
                 assert!(close(&map), "{history:?}");
+                if history == HistoryPhotons::OnePass {
+                    // One pass's photons from pass 1 on, though the first passes kept more.
+                    let n = earlier.len();
+                    assert!(
+                        map.len().abs_diff(photons.len()) <= n,
+                        "{} photons",
+                        map.len()
+                    );
+                }
             }
             let steady = history_map(&slices[8..12], 4, history).unwrap();
             let passes = if history == HistoryPhotons::OnePass {
