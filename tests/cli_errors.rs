@@ -331,6 +331,28 @@ fn photon_counts_that_cannot_fit_in_memory_are_refused_before_tracing() {
         );
         assert!(!output.exists());
     }
+    // A caustic map that only grows that large late in the render is refused up front too,
+    // and a render that ends before it grows is not.
+    let grown = [
+        "--caustic-photons",
+        "1000000",
+        "--caustic-photons-max",
+        "100000000000",
+    ];
+    let out = f.render(&output, &[&grown[..], &["--passes", "100000"]].concat());
+    assert_fails(
+        &out,
+        2,
+        &[
+            "--caustic-photons 1000000 (growing to 12499875000 a pass by pass 99999, \
+             --caustic-photons-max 100000000000)",
+            "would need about",
+        ],
+        "growth",
+    );
+    assert!(!output.exists());
+    let small = ["--caustic-photons-max", "100000000000", "--passes", "2"];
+    assert_succeeds(&f.render(&output, &small), "no growth before pass 9");
     // The image counts too: 4e9 x 4e9 pixels is refused before rendering.
     let huge = caustic_scene(1.0, 4_000_000_000, 4_000_000_000);
     let scene = write_scene(f.dir.path(), "huge.toml", &huge);

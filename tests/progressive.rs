@@ -5,9 +5,9 @@
 
 mod support;
 
-use dpm::render::film_file;
 use dpm::render::merge::{self, MergeArgs, MergeError};
 use dpm::render::pipeline;
+use dpm::render::{film, film_file};
 use std::path::{Path, PathBuf};
 use support::*;
 
@@ -52,11 +52,21 @@ fn shards_merged_equal_one_run_and_resuming_equals_both() {
     let d = |n: &str| dir.path().join(n);
     for estimator in ["diffusion", "cone"] {
         // The diffusion runs shape their kernels on earlier passes' photons, which a shard
-        // starting past pass 0 must trace again.
+        // starting past pass 0 must trace again, at those passes' grown counts.
         let est: Vec<&str> = match estimator {
             "diffusion" => vec!["--estimator", estimator, "--tensor-history", "2"],
             _ => vec!["--estimator", estimator],
         };
+        let est = [
+            &est[..],
+            &[
+                "--caustic-growth-from",
+                "1",
+                "--caustic-photons-max",
+                "50000",
+            ],
+        ]
+        .concat();
         let whole = render(
             &scene,
             &d("whole.pfm"),
@@ -520,7 +530,7 @@ fn dimensionless_diffusivity_holds_as_the_radius_shrinks() {
 }
 
 /// The defaults chosen by measurement (docs/guide.md, "Choosing settings"): 8 passes of 75,000
-/// caustic and 300,000 global photons, the global map shown directly, 4 light samples, 4
+/// caustic (growing to 300,000 from pass 9 on) and 300,000 global photons, the global map shown directly, 4 light samples, 4
 /// camera samples in edge pixels, the caustic radius of 100 photons; one pass with a photon
 /// map file; as many as the budget holds with --time alone.
 #[test]
@@ -540,12 +550,89 @@ fn a_default_render_is_eight_progressive_passes() {
         (75_000, 0, 1)
     );
     assert_eq!((args.light_samples, args.edge_samples), (4, 4));
+    // The caustic map grows from pass 9 on, past a default render's last pass.
+    assert_eq!(
+        (args.caustic_growth_from, args.caustic_photons_max),
+        (8, 300_000)
+    );
     let o = pipeline::run(&args).expect("render");
     assert_eq!(o.film.passes().ranges(), &[(0, 8)]);
     let settings = &o.film.header.settings;
     assert_eq!(settings.global_photons, 300_000);
     assert_eq!(settings.estimator.k, 100);
     assert_eq!(o.caustic.map(|c| c.stored), Some(75_000));
+}
+
+/// `--caustic-photons-max`: pass i stores `N · i / from` caustic photons, within `N` and the
+/// maximum, at radii
+/// shrunk by the square root of that factor. The caustic layer keeps its mean (the estimate is
+/// normalised whatever the radius), the film records the growth, and a film written before the
+/// setting existed reads as no growth.
+#[test]
+fn grown_passes_store_more_caustic_photons_and_keep_the_caustic_mean() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = small_box(dir.path());
+    let d = |n: &str| dir.path().join(n);
+    let stored = |o: &pipeline::RenderOutcome| {
+        let phase = (o.times.phases.iter())
+            .find(|p| p.name == "trace caustic photons")
+            .expect("traced");
+        phase.counts.iter().find(|(n, _)| n == "stored").unwrap().1
+    };
+    let caustic_mean = |o: &pipeline::RenderOutcome| {
+        let layer = o.film.layer("caustic").expect("caustic layer");
+        let sum: f64 = layer.pixels.iter().map(|p| p.element_sum() as f64).sum();
+        sum / layer.pixels.len() as f64
+    };
+    let passes = ["--passes", "6", "--estimator", "diffusion"];
+    let grown = render(
+        &scene,
+        &d("g.pfm"),
+        &[
+            &passes[..],
+            &[
+                "--caustic-growth-from",
+                "2",
+                "--caustic-photons-max",
+                "40000",
+            ],
+        ]
+        .concat(),
+    );
+    // Factors 1, 1, 1, 1.5, 2, 2 of FAST's 20,000.
+    assert_eq!(stored(&grown), 20_000 * 3 + 30_000 + 40_000 * 2);
+    assert_eq!(grown.caustic.map(|c| c.stored), Some(40_000));
+    let flat = render(
+        &scene,
+        &d("f.pfm"),
+        &[&passes[..], &["--caustic-growth-from", "0"]].concat(),
+    );
+    assert_eq!(stored(&flat), 20_000 * 6);
+    let (g, f) = (caustic_mean(&grown), caustic_mean(&flat));
+    assert!(
+        f > 0.0 && rel_err(g, f) < 0.01,
+        "caustic mean {g} grown, {f} flat"
+    );
+    // The last pass's radius: the flat run's over √2.
+    let radius = |o: &pipeline::RenderOutcome| -> f64 {
+        let text = o.estimator.as_deref().expect("estimator");
+        let at = text.find(" radius=").expect("radius") + 8;
+        text[at..].split(' ').next().unwrap().parse().unwrap()
+    };
+    let ratio = radius(&flat) / radius(&grown);
+    assert!((ratio - 2f64.sqrt()).abs() < 1e-4, "radius ratio {ratio}");
+
+    // The film names the growth; without it, a film's settings are those of no growth.
+    assert_ne!(grown.film.header, flat.film.header);
+    let header = serde_json::to_string(&flat.film.header).unwrap();
+    assert!(!header.contains("caustic-growth"), "{header}");
+    let read: film::FilmHeader = serde_json::from_str(&header).unwrap();
+    assert_eq!(read, flat.film.header);
+    let grown_header = serde_json::to_string(&grown.film.header).unwrap();
+    assert!(
+        grown_header.contains("\"caustic-growth\":{\"from-pass\":2,\"max-photons\":40000}"),
+        "{grown_header}"
+    );
 }
 
 /// A shard that does not start at pass 0 with every radius given (no global map, `--radius`)

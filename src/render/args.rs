@@ -131,6 +131,24 @@ pub struct RenderArgs {
           allow_negative_numbers = true, help_heading = headings::PHOTONS)]
     pub caustic_photons: usize,
 
+    /// The most caustic photons a late pass stores (at most --caustic-photons: every pass the
+    /// same).
+    ///
+    /// Pass i stores --caustic-photons · i / --caustic-growth-from, within these two counts,
+    /// and its caustic radii shrink by the square root of its count over --caustic-photons, so
+    /// its kernels hold as many photons as before, only tighter. Short renders keep cheap
+    /// passes; long ones, whose error is mostly the kernels' blur, buy photons, which cost
+    /// little beside the eye pass (docs/guide.md, "Choosing settings").
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_CAUSTIC_PHOTONS_MAX,
+          help_heading = headings::PHOTONS, hide_short_help = true)]
+    pub caustic_photons_max: u64,
+
+    /// The last pass at --caustic-photons before the count grows (0: it never grows; see
+    /// --caustic-photons-max).
+    #[arg(long, value_name = "PASS", default_value_t = DEFAULT_CAUSTIC_GROWTH_FROM,
+          help_heading = headings::PHOTONS, hide_short_help = true)]
+    pub caustic_growth_from: u64,
+
     /// Photons stored in each pass's global map (indirect diffuse light).
     ///
     /// Default: 300000 when the scene has two or more diffuse objects (so diffuse light can
@@ -364,6 +382,11 @@ pub const DEFAULT_PASSES: u64 = 8;
 pub const DEFAULT_RADIUS_K: usize = 100;
 /// Stored caustic photons per pass by default.
 pub const DEFAULT_CAUSTIC_PHOTONS: usize = 75_000;
+/// The most caustic photons a late pass stores by default (BENCHMARKS.md, "caustic-glass
+/// against pbrt-v3's SPPM").
+pub const DEFAULT_CAUSTIC_PHOTONS_MAX: u64 = 300_000;
+/// The last pass at --caustic-photons by default: a default render (8 passes) ends before it.
+pub const DEFAULT_CAUSTIC_GROWTH_FROM: u64 = 8;
 /// Stored global photons per pass by default (scenes with two or more diffuse objects).
 pub const DEFAULT_GLOBAL_PHOTONS: usize = 300_000;
 /// Stored global photons per pass by default in a scene whose one diffuse object sees itself

@@ -6,6 +6,7 @@
 //! measured peak.
 
 use super::pipeline::RenderError;
+use super::schedule::PhotonGrowth;
 use crate::estimate::settings::{EstimatorKind, EstimatorSettings};
 use crate::photon::store::MapInfo;
 use crate::photon::tracer::MapKind;
@@ -85,25 +86,41 @@ pub fn human_bytes(bytes: u64) -> String {
 }
 
 /// Refuses, before anything is allocated, photon counts (and an image size) that would not
-/// fit in memory.
+/// fit in memory. `wanted` holds pass 0's counts; the caustic map's grows by `growth` up to
+/// pass `last_pass`, the last this run may render.
 pub(super) fn check_memory(
     estimator: &EstimatorSettings,
     world: &World,
     wanted: &[MapInfo],
+    growth: &PhotonGrowth,
+    last_pass: u64,
 ) -> Result<(), RenderError> {
+    let peak: Vec<MapInfo> = (wanted.iter())
+        .map(|w| match w.kind {
+            MapKind::Caustic => MapInfo {
+                target: growth.photons(w.target, last_pass),
+                ..*w
+            },
+            MapKind::Global { .. } => *w,
+        })
+        .collect();
     let camera = &world.description.camera;
     // Passes' worth of caustic photons the tensor history keeps.
     let diffusion = (estimator.estimator == EstimatorKind::Diffusion)
         .then_some((estimator.history_photons).passes_kept(estimator.tensor_history));
     let (width, height) = camera.image_size();
-    let needed = memory_estimate(wanted, diffusion, width, height);
+    let needed = memory_estimate(&peak, diffusion, width, height);
     let (available, source) = available_memory();
     if needed <= available {
         return Ok(());
     }
-    let mut what: Vec<String> = wanted
-        .iter()
-        .map(|w| match w.kind {
+    let mut what: Vec<String> = (wanted.iter().zip(&peak))
+        .map(|(w, p)| match w.kind {
+            MapKind::Caustic if p.target > w.target => format!(
+                "--caustic-photons {} (growing to {} a pass by pass {last_pass}, \
+                 --caustic-photons-max {})",
+                w.target, p.target, growth.max_photons
+            ),
             MapKind::Caustic => format!("--caustic-photons {}", w.target),
             MapKind::Global { .. } => format!("--global-photons {}", w.target),
         })

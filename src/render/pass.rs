@@ -6,8 +6,9 @@
 //! seed and its index, so any pass can run anywhere and in any order. Owns the per-pass
 //! wiring; must not accumulate passes (the [`super::film`] does) or read the command line.
 //!
-//! Progressive radii. Pass `i` scales every radius by [`Schedule::radius_scale`]: the
-//! fixed-radius estimates (Epanechnikov, diffusion: `r`, `r_g` and `ρ` together) from their
+//! Progressive radii. Pass `i` scales every radius by [`Schedule::radius_scale`], the caustic
+//! estimate's also by the square root of its map's growth ([`Schedule::caustic_radius_scale`]):
+//! the fixed-radius estimates (Epanechnikov, diffusion: `r`, `r_g` and `ρ` together) from their
 //! pass-0 radius; the k-NN estimates (simple, cone, Gaussian, and the global map's constant
 //! kernel) keep pass 0 as the one-shot estimate, and from pass 1 on cap their search at the
 //! scaled base radius (`--radius`, else the k-equivalent radius of pass 0's map). Once the cap
@@ -24,7 +25,7 @@ use super::integrator::Emission;
 use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
 use super::kernel_probe::KernelProbe;
 use super::pilots::PixelPlan;
-use super::schedule::{Schedule, pass_estimator};
+use super::schedule::{PhotonGrowth, Schedule, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::diffusion::shaped::ShapedBy;
 use crate::estimate::kernel::RadialKernel;
@@ -91,7 +92,15 @@ pub struct RenderSettings {
     pub glossy_min_alpha: f32,
     /// `α` of the progressive radius reduction.
     pub alpha: f64,
+    /// How the caustic map's count grows with the passes. Films written before it existed
+    /// stored the same count in every pass.
+    #[serde(default = "no_growth", skip_serializing_if = "PhotonGrowth::is_none")]
+    pub caustic_growth: PhotonGrowth,
     pub estimator: EstimatorSettings,
+}
+
+fn no_growth() -> PhotonGrowth {
+    PhotonGrowth::NONE
 }
 
 fn no_path_limit(paths: &u64) -> bool {
@@ -188,6 +197,14 @@ pub fn wanted_maps(settings: &RenderSettings, world: &World) -> Vec<crate::photo
     wanted
 }
 
+/// Photons pass `pass` stores in a map the render wants (`info.target` is pass 0's).
+pub fn pass_target(info: &crate::photon::store::MapInfo, schedule: &Schedule, pass: u64) -> u64 {
+    match info.kind {
+        MapKind::Caustic => schedule.growth.photons(info.target, pass),
+        MapKind::Global { .. } => info.target,
+    }
+}
+
 /// Traces the maps of pass `pass` (an interruption leaves them empty: check for it).
 pub fn trace_pass_maps(
     world: &World,
@@ -203,20 +220,15 @@ pub fn trace_pass_maps(
             MapKind::Caustic => (&mut maps.caustic, "caustic photons"),
             MapKind::Global { .. } => (&mut maps.global, "global photons"),
         };
-        let bar = progress(info.target, what);
+        let target = pass_target(&info, schedule, pass);
+        let bar = progress(target, what);
         let start = Instant::now();
         let max_paths = match info.kind {
             MapKind::Global { .. } if settings.global_paths > 0 => Some(settings.global_paths),
             _ => None,
         };
-        let (map, counts) = trace_map_within(
-            world,
-            info.kind,
-            info.target as usize,
-            max_paths,
-            seed,
-            &bar,
-        );
+        let (map, counts) =
+            trace_map_within(world, info.kind, target as usize, max_paths, seed, &bar);
         bar.finish_and_clear();
         times.accumulate(
             &format!("trace {what}"),

@@ -16,8 +16,8 @@ use super::film_file;
 use super::memory_budget::check_memory;
 use super::pass::{BaseRadii, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
 use super::pilots::PixelPlan;
-use super::pipeline::RenderError;
-use super::schedule::Schedule;
+use super::pipeline::{RenderError, pass_count};
+use super::schedule::{MAX_PASSES, PhotonGrowth, Schedule};
 use crate::estimate::settings::EstimatorKind;
 use crate::image_io::ImageFormat;
 use crate::photon::store::{self, MapInfo};
@@ -99,14 +99,26 @@ impl Wiring {
         drop_an_empty_lone_global_map(&mut settings, args, world, times);
         super::caustic_guide::learn(world, &settings, args.seed, times);
         let wanted = wanted_maps(&settings, world);
-        check_memory(&settings.estimator, world, &wanted)?;
+        // The caustic map is largest in the last pass this run may render.
+        let last_pass = match (args.passes, args.time, &args.resume) {
+            (_, _, Some(_)) | (None, Some(_), _) => MAX_PASSES,
+            _ => (args.first_pass + pass_count(args)).saturating_sub(1),
+        };
+        check_memory(
+            &settings.estimator,
+            world,
+            &wanted,
+            &settings.caustic_growth,
+            last_pass,
+        )?;
         // The kernel field needs the diffusion estimate and a caustic map to steer it.
         let kernel_field = settings.estimator.estimator == EstimatorKind::Diffusion
             && wanted.iter().any(|w| w.kind == MapKind::Caustic)
             && (args.kernel_field.is_some()
                 || ImageFormat::from_path(output).ok() == Some(ImageFormat::Exr));
         Ok(Self {
-            schedule: Schedule::new(settings.alpha, args.seed),
+            schedule: Schedule::new(settings.alpha, args.seed)
+                .with_growth(settings.caustic_growth, settings.caustic_photons as u64),
             settings,
             wanted,
             scene_hash,
@@ -268,6 +280,11 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         },
         glossy_min_alpha: args.glossy_min_alpha,
         alpha: args.ppm_alpha,
+        caustic_growth: PhotonGrowth::new(
+            args.caustic_growth_from,
+            args.caustic_photons_max,
+            args.caustic_photons as u64,
+        ),
         estimator: args.estimate.settings_with_radius_k(DEFAULT_RADIUS_K),
     }
 }

@@ -6,7 +6,7 @@
 //! again and renders the same pass as one run would. Owns which passes are kept and the map
 //! they make; must not shade.
 
-use super::pass::{RenderSettings, wanted_maps};
+use super::pass::{RenderSettings, pass_target, wanted_maps};
 use super::schedule::Schedule;
 use crate::estimate::diffusion::shaped::{HistoryPhotons, history_map};
 use crate::photon::tracer::{MapKind, trace_map};
@@ -56,12 +56,13 @@ impl TensorHistory {
             if self.passes.iter().any(|(p, _)| *p == earlier) {
                 continue;
             }
-            let bar = progress(info.target, "caustic photons of an earlier pass");
+            let target = pass_target(&info, schedule, earlier);
+            let bar = progress(target, "caustic photons of an earlier pass");
             let start = Instant::now();
             let (map, counts) = trace_map(
                 world,
                 info.kind,
-                info.target as usize,
+                target as usize,
                 schedule.seed(earlier),
                 &bar,
             );
