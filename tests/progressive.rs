@@ -141,6 +141,7 @@ fn merge_refuses_overlaps_and_films_of_another_render() {
     let p12 = film("p12.film", &["--first-pass", "1", "--passes", "2"]);
     let seed = film("seed.film", &["--first-pass", "2", "--seed", "5"]);
     let k = film("k.film", &["--first-pass", "2", "--global-k", "40"]);
+    let l3 = film("l3.film", &["--first-pass", "2", "--lambda3", "0.2"]);
     let p3 = film("p3.film", &["--first-pass", "3"]);
     let wide = film("wide.film", &["--first-pass", "2", "--resolution", "48x30"]);
     let out = d("m.pfm");
@@ -155,7 +156,8 @@ fn merge_refuses_overlaps_and_films_of_another_render() {
     };
     refused(&[&p01, &p12], &["p12.film", "p01.film", "both hold pass 1"]);
     refused(&[&p01, &seed], &["seed.film", "differ in seed"]);
-    refused(&[&p01, &k], &["k.film", "differ in settings"]);
+    refused(&[&p01, &k], &["k.film", "differ in settings (global-k)"]);
+    refused(&[&p01, &l3], &["differ in settings (estimator.lambda3)"]);
     refused(&[&p01, &wide], &["wide.film", "differ in resolution"]);
     // A gap is merged, and named.
     let merged = merge::run(&merge_args(&[&p01, &p3], &out, None)).expect("merge with a gap");
@@ -173,14 +175,28 @@ fn merge_refuses_overlaps_and_films_of_another_render() {
     args.extend_from_slice(&["--resume", path_str(&p01), "--seed", "9"]);
     let e = pipeline::run(&render_args(&args)).err().expect("refused");
     assert_eq!(e.exit_code(), 2);
-    assert!(e.to_string().contains("seed differs"), "{e}");
+    assert!(e.to_string().contains("differ in seed"), "{e}");
     // So is a resume at another --resolution.
     let mut args = vec![path_str(&scene), "-o", path_str(&out)];
     args.extend_from_slice(&FAST);
     args.extend_from_slice(&["--resume", path_str(&p01), "--resolution", "48x30"]);
     let e = pipeline::run(&render_args(&args)).err().expect("refused");
     assert_eq!(e.exit_code(), 2);
-    assert!(e.to_string().contains("resolution differs"), "{e}");
+    assert!(e.to_string().contains("differ in resolution"), "{e}");
+    // A film whose caustic map never grows (as every film before the growth did) names the
+    // setting that differs, so that its resume can give the flag.
+    let flat = film("flat.film", &["--caustic-growth-from", "0"]);
+    let mut args = vec![path_str(&scene), "-o", path_str(&out)];
+    args.extend_from_slice(&FAST);
+    args.extend_from_slice(&["--resume", path_str(&flat)]);
+    let e = pipeline::run(&render_args(&args)).err().expect("refused");
+    assert!(
+        e.to_string()
+            .contains("differ in settings (caustic-growth)"),
+        "{e}"
+    );
+    args.extend_from_slice(&["--caustic-growth-from", "0"]);
+    pipeline::run(&render_args(&args)).expect("resumed with the film's setting");
 }
 
 #[test]

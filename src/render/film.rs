@@ -45,26 +45,56 @@ pub struct FilmHeader {
     pub response: ImageResponse,
 }
 
+/// The first field (as the film file names it, `estimator.k` for a nested one) in which two
+/// renders' settings differ, so that a refusal says which flag to give: a film written before
+/// a default changed differs in that default.
+fn settings_difference(a: &RenderSettings, b: &RenderSettings) -> Option<String> {
+    let (a, b) = (serde_json::to_value(a).ok()?, serde_json::to_value(b).ok()?);
+    fn first(a: &serde_json::Value, b: &serde_json::Value, prefix: &str) -> Option<String> {
+        let (Some(a), Some(b)) = (a.as_object(), b.as_object()) else {
+            return (a != b).then(|| prefix.to_string());
+        };
+        let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+        keys.sort();
+        keys.dedup();
+        keys.into_iter().find_map(|key| {
+            let null = serde_json::Value::Null;
+            let (x, y) = (a.get(key).unwrap_or(&null), b.get(key).unwrap_or(&null));
+            let name = if prefix.is_empty() {
+                key.clone()
+            } else {
+                format!("{prefix}.{key}")
+            };
+            (x != y).then(|| first(x, y, &name)).flatten()
+        })
+    }
+    first(&a, &b, "")
+}
+
 impl FilmHeader {
     /// The first field in which `other` differs, for a merge's error message.
-    pub fn first_difference(&self, other: &FilmHeader) -> Option<&'static str> {
-        if self.scene_hash != other.scene_hash {
-            Some("scene")
+    pub fn first_difference(&self, other: &FilmHeader) -> Option<String> {
+        let what = if self.scene_hash != other.scene_hash {
+            "scene"
         } else if self.seed != other.seed {
-            Some("seed")
+            "seed"
         } else if (self.width, self.height) != (other.width, other.height) {
-            Some("resolution")
+            "resolution"
         } else if self.settings != other.settings {
-            Some("settings")
+            return Some(match settings_difference(&self.settings, &other.settings) {
+                Some(field) => format!("settings ({field})"),
+                None => "settings".into(),
+            });
         } else if self.radii != other.radii {
-            Some("radii")
+            "radii"
         } else if self.kernel_field != other.kernel_field {
-            Some("kernel field")
+            "kernel field"
         } else if self.response != other.response {
-            Some("image response (film scale, exposure or white balance)")
+            "image response (film scale, exposure or white balance)"
         } else {
-            None
-        }
+            return None;
+        };
+        Some(what.into())
     }
 
     pub fn channels(&self) -> usize {
@@ -230,7 +260,7 @@ pub enum FilmError {
     #[error("both hold pass {0}")]
     Overlap(u64),
     #[error("they differ in {0}")]
-    Mismatch(&'static str),
+    Mismatch(String),
     #[error(
         "the pass image is {got_w}x{got_h} with {got_c} channels; the film is {w}x{h} with {c}"
     )]

@@ -159,7 +159,7 @@ impl Wiring {
             let probe = self.header(args, world, resumed.header.radii);
             if let Some(field) = resumed.header.first_difference(&probe) {
                 return Err(RenderError::Invalid(format!(
-                    "--resume {}: the film's {field} differs from this render's; it cannot be continued",
+                    "--resume {}: the film and this render differ in {field}; it cannot be continued",
                     path.display()
                 )));
             }
