@@ -67,7 +67,7 @@ impl PassLoop<'_> {
             budget_note: None,
             interrupted: false,
         };
-        let last = (first + self.pass_limit()).min(MAX_PASSES);
+        let last = (first + super::pipeline::pass_limit(self.args)).min(MAX_PASSES);
         let bar = self.bar(first, last);
         let mut last_write: Option<LastWrite> = None;
         let settings = &self.wiring.settings;
@@ -170,15 +170,6 @@ impl PassLoop<'_> {
 
     fn elapsed(&self) -> f64 {
         self.run_start.elapsed().as_secs_f64()
-    }
-
-    /// Passes this run may render: --passes, else the default, else (with --time alone) as
-    /// many as a render holds.
-    fn pass_limit(&self) -> u64 {
-        match (self.args.passes, self.args.time) {
-            (None, Some(_)) => MAX_PASSES,
-            _ => super::pipeline::pass_count(self.args),
-        }
     }
 
     /// With a budget and no pass count, the bar counts seconds of the budget.

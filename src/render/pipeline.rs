@@ -228,6 +228,15 @@ pub(super) fn pass_count(args: &RenderArgs) -> u64 {
     )
 }
 
+/// Passes this run may render: --passes, else the default, else (with --time alone) as many
+/// as a render holds.
+pub(super) fn pass_limit(args: &RenderArgs) -> u64 {
+    match (args.passes, args.time) {
+        (None, Some(_)) => MAX_PASSES,
+        _ => pass_count(args),
+    }
+}
+
 fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, RenderError> {
     embree::enable_flush_to_zero();
     let run_start = Instant::now();

@@ -16,7 +16,7 @@ use super::film_file;
 use super::memory_budget::check_memory;
 use super::pass::{BaseRadii, PassMaps, RenderSettings, trace_pass_maps, wanted_maps};
 use super::pilots::PixelPlan;
-use super::pipeline::{RenderError, pass_count};
+use super::pipeline::{RenderError, pass_limit};
 use super::schedule::{MAX_PASSES, PhotonGrowth, Schedule};
 use crate::estimate::settings::EstimatorKind;
 use crate::image_io::ImageFormat;
@@ -99,10 +99,13 @@ impl Wiring {
         drop_an_empty_lone_global_map(&mut settings, args, world, times);
         super::caustic_guide::learn(world, &settings, args.seed, times);
         let wanted = wanted_maps(&settings, world);
-        // The caustic map is largest in the last pass this run may render.
-        let last_pass = match (args.passes, args.time, &args.resume) {
-            (_, _, Some(_)) | (None, Some(_), _) => MAX_PASSES,
-            _ => (args.first_pass + pass_count(args)).saturating_sub(1),
+        // The caustic map is largest in the last pass this run may render (a resumed film's
+        // first pass is not known yet).
+        let last_pass = match args.resume {
+            Some(_) => MAX_PASSES,
+            None => (args.first_pass + pass_limit(args))
+                .min(MAX_PASSES)
+                .saturating_sub(1),
         };
         check_memory(
             &settings.estimator,
