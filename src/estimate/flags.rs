@@ -197,6 +197,18 @@ pub struct EstimatorFlags {
     #[arg(long, value_enum, value_name = "PHOTONS", default_value = "one-pass",
           help_heading = headings::KERNEL, hide_short_help = true)]
     pub history_photons: HistoryPhotons,
+
+    /// Cut each kernel at the edge the tensor history's photons show (needs --tensor-history).
+    ///
+    /// Where the kernel is squeezed (λ2 < 0.9), a step in the history photons' density across
+    /// the edge is fitted within the kernel's disc (its normal turned up to 0.3 rad from X2;
+    /// a second step inside makes a strip); the estimate is then the round kernel on the
+    /// query's side only, divided by its share there. The constructed distribution's edge
+    /// error after 16 passes falls to 0.60× the own-pass tensor's with `--history-photons
+    /// all`; on caustics that are not steps (the metal ring's cusp) it costs time and error
+    /// (BENCHMARKS.md, "A structure tensor across passes").
+    #[arg(long, help_heading = headings::KERNEL, hide_short_help = true)]
+    pub edge_cut: bool,
 }
 
 impl EstimatorFlags {
@@ -232,6 +244,7 @@ impl EstimatorFlags {
             crossings: self.crossings,
             tensor_history: self.tensor_history,
             history_photons: self.history_photons,
+            edge_cut: self.edge_cut,
         }
     }
 }

@@ -60,6 +60,8 @@ pub struct Scratch {
     /// The diffusion estimate's leaf runs of slots whose photons all lie on the query's
     /// surface: its kernel streams them again instead of copying each photon out.
     pub kernel_runs: Vec<diffusion::LeafRun>,
+    /// The edge cut's buffers.
+    pub edge: diffusion::edge::EdgeScratch,
 }
 
 pub trait RadianceEstimate: Send + Sync {

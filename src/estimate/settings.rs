@@ -112,6 +112,10 @@ pub struct EstimatorSettings {
     /// used all.
     #[serde(default = "all_history_photons")]
     pub history_photons: HistoryPhotons,
+    /// Whether kernels shaped on the tensor history cut themselves at the edge its photons
+    /// show. Films written before it existed did not.
+    #[serde(default)]
+    pub edge_cut: bool,
 }
 
 fn all_history_photons() -> HistoryPhotons {
@@ -143,6 +147,7 @@ impl Default for EstimatorSettings {
             crossings: Crossings::Shrink,
             tensor_history: DEFAULT_TENSOR_HISTORY,
             history_photons: HistoryPhotons::OnePass,
+            edge_cut: false,
         }
     }
 }
@@ -190,7 +195,7 @@ impl fmt::Display for ResolvedEstimator {
                     f,
                     "diffusion radius={} gradient-radius={} smoothing-radius={} K={} ({:?}) \
                      alpha={} lambda3={} lambda2-floor={} noise-floor={} min-kernel-photons={} \
-                     gradient-sites={} kernel={:?} crossings={:?}",
+                     gradient-sites={} kernel={:?} crossings={:?} edge-cut={}",
                     p.radius,
                     p.gradient_radius,
                     p.smoothing_radius,
@@ -203,10 +208,19 @@ impl fmt::Display for ResolvedEstimator {
                     p.min_kernel_photons,
                     p.gradient_sites,
                     p.kernel,
-                    p.crossings
+                    p.crossings,
+                    p.edge_cut
                 )
             }
         }
+    }
+}
+
+/// A setting's value as the command line spells it.
+fn kebab(value: &impl serde::Serialize) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s,
+        _ => String::new(),
     }
 }
 
@@ -281,6 +295,21 @@ impl EstimatorSettings {
                 "must be finite and at least 1",
             ));
         }
+        if self.edge_cut && self.estimator != EstimatorKind::Diffusion {
+            return Err(invalid(
+                "edge-cut",
+                format!("with --estimator {}", kebab(&self.estimator)),
+                "only the diffusion estimate cuts its kernel",
+            ));
+        }
+        if self.edge_cut && self.tensor_history == 0 {
+            return Err(invalid(
+                "edge-cut",
+                "with --tensor-history 0",
+                "the edge is located on earlier passes' photons, never on those the estimate \
+                 sums: give --tensor-history 1 or more",
+            ));
+        }
         // The rest are the diffusion parameters; check them with a stand-in radius.
         let params = self.diffusion_params(1.0);
         if let Err((flag, reason)) = params.check() {
@@ -292,6 +321,7 @@ impl EstimatorSettings {
                 "noise-floor" => self.noise_floor.to_string(),
                 "min-kernel-photons" => self.min_kernel_photons.to_string(),
                 "gradient-sites" => self.gradient_sites.to_string(),
+                "edge-cut" => format!("with --kernel {}", kebab(&self.kernel)),
                 _ => String::new(),
             };
             return Err(EstimateError::InvalidSetting {
@@ -318,6 +348,7 @@ impl EstimatorSettings {
             min_kernel_photons: self.min_kernel_photons,
             gradient_sites: self.gradient_sites,
             crossings: self.crossings,
+            edge_cut: self.edge_cut,
         }
     }
 

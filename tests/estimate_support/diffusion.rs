@@ -26,6 +26,7 @@ pub fn params(r: f32) -> DiffusionParams {
         min_kernel_photons: 0.0,
         gradient_sites: 256.0,
         crossings: Crossings::Keep,
+        edge_cut: false,
     }
 }
 

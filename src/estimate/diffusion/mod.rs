@@ -21,6 +21,7 @@
 //! one (standard deviation about 1.8× at the default floor with N = 1000) in exchange for
 //! losing the blur (see `tests/estimate_diffusion.rs`).
 
+pub mod edge;
 pub mod field_colour;
 pub mod gradient;
 mod scan;
@@ -124,6 +125,9 @@ pub struct DiffusionParams {
     pub gradient_sites: f64,
     /// What the kernel does at crossings.
     pub crossings: Crossings,
+    /// Whether a kernel shaped on another map cuts itself at the edge that map's photons show
+    /// ([`edge`]); needs the Epanechnikov kernel.
+    pub edge_cut: bool,
 }
 
 impl DiffusionParams {
@@ -159,6 +163,9 @@ impl DiffusionParams {
         }
         if !(self.min_kernel_photons >= 0.0 && self.min_kernel_photons.is_finite()) {
             return Err(("min-kernel-photons", "must be zero or positive and finite"));
+        }
+        if self.edge_cut && self.kernel != DiffusionKernel::Epanechnikov {
+            return Err(("edge-cut", "needs --kernel epanechnikov"));
         }
         if !(self.gradient_sites == 0.0 || (1.0..=1e9).contains(&self.gradient_sites)) {
             return Err((

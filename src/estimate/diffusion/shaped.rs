@@ -4,10 +4,13 @@
 //! summed over the pass's own photons. The shape is then independent of the photons it
 //! weighs: a kernel shaped by the same photons it sums leans on their noise, which lost 0.6% of
 //! the constructed distribution's interior energy after 16 passes and 1.1% of caustic-glass's
-//! caustic, and which averaging passes does not remove. Owns that sum; must not trace rays.
+//! caustic, and which averaging passes does not remove. With `--edge-cut` a squeezed kernel is
+//! also cut at the edge the other map's photons show ([`super::edge`]). Owns that sum; must
+//! not trace rays.
 
 use super::super::classic::{PhotonReader, power_of};
 use super::super::{Query, Receiver, Scratch, to_irradiance, weighed_power};
+use super::edge::{self, Strip};
 use super::structure::TangentFrame;
 use super::tensor::DiffusionTensor;
 use super::{DiffusionEstimate, surface_leaves};
@@ -150,8 +153,11 @@ impl super::super::RadianceEstimate for ShapedBy<'_> {
         receiver: &dyn Receiver,
         scratch: &mut Scratch,
     ) -> Vec3 {
-        let (tensor, _) = self.estimate.analyse(self.analysis, query, scratch);
-        (self.estimate).photon_by_photon(&tensor, map, query, |p| weighed_power(p, receiver))
+        let (tensor, shape) = self.estimate.analyse(self.analysis, query, scratch);
+        let strip =
+            (self.estimate).edge_strip(self.analysis, query, &tensor, shape.lambda2, scratch);
+        let weigh = |p: &crate::photon::PhotonAttributes| weighed_power(p, receiver);
+        (self.estimate).photon_by_photon(&tensor, strip.as_ref(), map, query, weigh)
     }
 }
 
@@ -167,9 +173,10 @@ impl DiffusionEstimate {
         query: &Query,
         scratch: &mut Scratch,
     ) -> Vec3 {
-        let (tensor, _) = self.analyse(analysis, query, scratch);
-        let Some(field) = map.leaf_sums() else {
-            return self.photon_by_photon(&tensor, map, query, power_of);
+        let (tensor, shape) = self.analyse(analysis, query, scratch);
+        let strip = self.edge_strip(analysis, query, &tensor, shape.lambda2, scratch);
+        let Some(field) = map.leaf_sums().filter(|_| strip.is_none()) else {
+            return self.photon_by_photon(&tensor, strip.as_ref(), map, query, power_of);
         };
         let r2 = sq(self.params.radius) as f32;
         let normal = TangentFrame::new(query.normal).normal.as_vec3();
@@ -196,15 +203,60 @@ impl DiffusionEstimate {
         self.kernel_sum(map, field, &tensor, query, scratch)
     }
 
+    /// With `--edge-cut`, where the kernel is squeezed: the strip of its disc on the query's
+    /// side of the edge `analysis`'s photons show.
+    fn edge_strip(
+        &self,
+        analysis: &PhotonMap,
+        query: &Query,
+        tensor: &DiffusionTensor,
+        lambda2: f32,
+        scratch: &mut Scratch,
+    ) -> Option<Strip> {
+        if !self.params.edge_cut || lambda2 >= edge::GATE_LAMBDA2 {
+            return None;
+        }
+        let r2 = sq(self.params.radius);
+        let axes = (tensor.x1, tensor.x2);
+        edge::locate(analysis, query, axes, r2, &mut scratch.edge)
+    }
+
     /// The kernel `tensor` shapes at the query, summed over `map`'s photons within `r` on the
-    /// query's surface one by one, each weighed by `weigh`.
+    /// query's surface one by one, each weighed by `weigh`. With a `strip`, the round kernel
+    /// (`λ3` along the normal as the tensor's) over the strip only, divided by the kernel's
+    /// share inside it.
     fn photon_by_photon(
         &self,
         tensor: &DiffusionTensor,
+        strip: Option<&Strip>,
         map: &PhotonMap,
         query: &Query,
         weigh: impl Fn(&crate::photon::PhotonAttributes) -> DVec3,
     ) -> Vec3 {
+        let r2 = sq(self.params.radius);
+        match strip {
+            None => {
+                let sum = self.weighed_sum(tensor, map, query, |_| true, weigh);
+                to_irradiance(sum * (tensor.plane_normalisation() / r2))
+            }
+            Some(strip) => {
+                let round = DiffusionTensor::new(tensor.x2, tensor.x3, 1.0, tensor.lambda3);
+                let sum = self.weighed_sum(&round, map, query, |d| strip.keeps(d), weigh);
+                to_irradiance(sum / (r2 * strip.epanechnikov_share(r2.sqrt())))
+            }
+        }
+    }
+
+    /// `Σ K(dᵀD⁻¹d / r²) weigh(photon)` over `map`'s photons within `r` on the query's surface
+    /// whose offsets `d` pass `keeps`.
+    fn weighed_sum(
+        &self,
+        tensor: &DiffusionTensor,
+        map: &PhotonMap,
+        query: &Query,
+        keeps: impl Fn(DVec3) -> bool,
+        weigh: impl Fn(&crate::photon::PhotonAttributes) -> DVec3,
+    ) -> DVec3 {
         let r2 = sq(self.params.radius);
         let metric = tensor.metric(r2);
         let kernel = self.params.kernel.radial().prepare();
@@ -215,10 +267,12 @@ impl DiffusionEstimate {
                 let photon = map.attributes(slot);
                 if reader.agrees(photon) {
                     let d = (map.position(slot) - query.position).as_dvec3();
-                    sum += kernel.weight(metric.distance(d)) * weigh(photon);
+                    if keeps(d) {
+                        sum += kernel.weight(metric.distance(d)) * weigh(photon);
+                    }
                 }
             });
-        to_irradiance(sum * (tensor.plane_normalisation() / r2))
+        sum
     }
 }
 
@@ -352,7 +406,7 @@ mod tests {
             };
             let (tensor, shape) = d.analyse(&analysis, &query, &mut scratch);
             squeezed += usize::from(shape.lambda2 < 0.5);
-            let one_by_one = d.photon_by_photon(&tensor, &map, &query, power_of);
+            let one_by_one = d.photon_by_photon(&tensor, None, &map, &query, power_of);
             let by_leaves = shaped.irradiance(&map, &query, &mut scratch);
             let scale = one_by_one.max_element().max(1e-6);
             assert!(
@@ -362,5 +416,71 @@ mod tests {
         }
         // The band's edges and the corner are in the sample.
         assert!(squeezed > 10, "{squeezed} squeezed kernels");
+    }
+    /// Photons uniform on the unit square, one in four kept where x > 0.5: a step of 4 to 1.
+    fn step_map(salt: u64) -> (PhotonMap, f64, f64) {
+        let photons: Vec<Photon> = (0..200_000u64)
+            .filter_map(|i| {
+                let (u, v) = (uniform(i, salt), uniform(i, salt + 1));
+                (u < 0.5 || i % 4 == 0)
+                    .then(|| Photon::new(Vec3::new(u, v, 0.0), Vec3::ONE, Vec3::NEG_Z, Vec3::Z))
+            })
+            .collect();
+        let high = photons.iter().filter(|p| p.position().x < 0.5).count() as f64 / 0.5;
+        let low = (photons.len() as f64 - 0.5 * high) / 0.5;
+        (PhotonMap::build(photons, 200_000), high, low)
+    }
+
+    #[test]
+    fn an_edge_cut_keeps_a_kernel_beside_an_edge_on_its_own_side() {
+        let estimate = |edge_cut| {
+            let settings = crate::estimate::EstimatorSettings {
+                radius: Some(0.03),
+                edge_cut,
+                ..Default::default()
+            };
+            let (map, ..) = step_map(1);
+            match settings.resolve(&map).unwrap() {
+                crate::estimate::ResolvedEstimator::Diffusion(d) => d,
+                _ => panic!("the default estimate is the diffusion estimate"),
+            }
+        };
+        let (mut analysis, ..) = step_map(11);
+        let (mut map, high, low) = step_map(23);
+        let mut scratch = Scratch::default();
+        // Mean estimate over 200 queries at `x` (0.003 from the edge: a tenth of r).
+        let mut mean_at = |cut: bool, x: f32| {
+            let d = estimate(cut);
+            d.gradient_pass(&mut analysis);
+            let shaped = ShapedBy {
+                estimate: d,
+                analysis: &analysis,
+            };
+            shaped.prepare(&mut map);
+            let sum: f64 = (0..200)
+                .map(|i| {
+                    let query = Query {
+                        position: Vec3::new(x, 0.1 + 0.004 * i as f32, 0.0),
+                        normal: Vec3::Z,
+                    };
+                    f64::from(shaped.irradiance(&map, &query, &mut scratch).x)
+                })
+                .sum();
+            sum / 200.0
+        };
+        let (cut_high, cut_low) = (mean_at(true, 0.497), mean_at(true, 0.503));
+        let (plain_high, plain_low) = (mean_at(false, 0.497), mean_at(false, 0.503));
+        assert!(
+            (cut_high / high - 1.0).abs() < 0.03,
+            "{cut_high} against {high}"
+        );
+        assert!(
+            (cut_low / low - 1.0).abs() < 0.05,
+            "{cut_low} against {low}"
+        );
+        // The squeezed ellipse, as wide across as the query's distance to the edge at the λ2
+        // floor, still reaches over it from the bright side (10% here).
+        assert!(plain_high < 0.95 * high, "{plain_high} against {high}");
+        assert!((cut_low - low).abs() < (plain_low - low).abs());
     }
 }
