@@ -21,7 +21,7 @@ pub const GATE_LAMBDA2: f32 = 0.9;
 /// Least log-likelihood gain, in photon counts, of a step over a flat density for a cut.
 /// A cut from independent photons leaves a flat density's estimate unbiased, so a false one
 /// costs only variance; 5 (a likelihood ratio of e⁵) took the constructed distribution's edge
-/// band lower than 15 or 30 did.
+/// band lower than 30 did (BENCHMARKS.md).
 pub const MIN_GAIN: f64 = 5.0;
 /// Least gain of the second step, inside the query's side: a false one there would leave the
 /// estimate a sliver of the disc (unbiased still, but noisy), so it must be clearer.

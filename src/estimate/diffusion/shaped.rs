@@ -417,6 +417,7 @@ mod tests {
         // The band's edges and the corner are in the sample.
         assert!(squeezed > 10, "{squeezed} squeezed kernels");
     }
+
     /// Photons uniform on the unit square, one in four kept where x > 0.5: a step of 4 to 1.
     fn step_map(salt: u64) -> (PhotonMap, f64, f64) {
         let photons: Vec<Photon> = (0..200_000u64)
