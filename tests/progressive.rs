@@ -269,6 +269,14 @@ fn several_passes_do_not_depend_on_the_thread_count() {
         &["--passes", "3", "--threads", "2"],
     );
     assert_eq!(one.film.sums(), two.film.sums());
+    // The edge cut too: its step fits read photons in the kd-tree's order, whatever the threads.
+    let cut = |threads: &str, name: &str| {
+        let flags = ["--passes", "3", "--threads", threads, "--edge-cut"];
+        render(&scene, &dir.path().join(name), &flags)
+    };
+    let (cut_one, cut_two) = (cut("1", "c1.pfm"), cut("2", "c2.pfm"));
+    assert_eq!(cut_one.film.sums(), cut_two.film.sums());
+    assert_ne!(cut_one.film.sums(), one.film.sums(), "the cut never acted");
     // Passes differ from each other: fresh photons and fresh samples.
     let first = render(&scene, &dir.path().join("p0.pfm"), &["--passes", "1"]);
     let second = render(&scene, &dir.path().join("p1.pfm"), &["--first-pass", "1"]);
