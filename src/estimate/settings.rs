@@ -217,11 +217,8 @@ impl fmt::Display for ResolvedEstimator {
 }
 
 /// A setting's value as the command line spells it.
-fn kebab(value: &impl serde::Serialize) -> String {
-    match serde_json::to_value(value) {
-        Ok(serde_json::Value::String(s)) => s,
-        _ => String::new(),
-    }
+fn cli_name(value: &impl clap::ValueEnum) -> String {
+    (value.to_possible_value()).map_or_else(String::new, |v| v.get_name().to_string())
 }
 
 fn invalid(flag: &'static str, value: impl fmt::Display, reason: &'static str) -> EstimateError {
@@ -298,7 +295,7 @@ impl EstimatorSettings {
         if self.edge_cut && self.estimator != EstimatorKind::Diffusion {
             return Err(invalid(
                 "edge-cut",
-                format!("with --estimator {}", kebab(&self.estimator)),
+                format!("with --estimator {}", cli_name(&self.estimator)),
                 "only the diffusion estimate cuts its kernel",
             ));
         }
@@ -321,7 +318,7 @@ impl EstimatorSettings {
                 "noise-floor" => self.noise_floor.to_string(),
                 "min-kernel-photons" => self.min_kernel_photons.to_string(),
                 "gradient-sites" => self.gradient_sites.to_string(),
-                "edge-cut" => format!("with --kernel {}", kebab(&self.kernel)),
+                "edge-cut" => format!("with --kernel {}", cli_name(&self.kernel)),
                 _ => String::new(),
             };
             return Err(EstimateError::InvalidSetting {
