@@ -5,6 +5,7 @@
 //! The per-photon figure bounds the peak while a map is traced and built; BENCHMARKS.md has the
 //! measured peak.
 
+use super::pass::pass_target;
 use super::pipeline::RenderError;
 use super::schedule::PhotonGrowth;
 use crate::estimate::settings::{EstimatorKind, EstimatorSettings};
@@ -96,12 +97,9 @@ pub(super) fn check_memory(
     last_pass: u64,
 ) -> Result<(), RenderError> {
     let peak: Vec<MapInfo> = (wanted.iter())
-        .map(|w| match w.kind {
-            MapKind::Caustic => MapInfo {
-                target: growth.photons(w.target, last_pass),
-                ..*w
-            },
-            MapKind::Global { .. } => *w,
+        .map(|w| MapInfo {
+            target: pass_target(w, growth, last_pass),
+            ..*w
         })
         .collect();
     let camera = &world.description.camera;

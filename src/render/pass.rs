@@ -197,10 +197,11 @@ pub fn wanted_maps(settings: &RenderSettings, world: &World) -> Vec<crate::photo
     wanted
 }
 
-/// Photons pass `pass` stores in a map the render wants (`info.target` is pass 0's).
-pub fn pass_target(info: &crate::photon::store::MapInfo, schedule: &Schedule, pass: u64) -> u64 {
+/// Photons pass `pass` stores in a map the render wants (`info.target` is pass 0's): the
+/// caustic map grows by `growth`, the global map keeps its count.
+pub fn pass_target(info: &crate::photon::store::MapInfo, growth: &PhotonGrowth, pass: u64) -> u64 {
     match info.kind {
-        MapKind::Caustic => schedule.growth.photons(info.target, pass),
+        MapKind::Caustic => growth.photons(info.target, pass),
         MapKind::Global { .. } => info.target,
     }
 }
@@ -220,7 +221,7 @@ pub fn trace_pass_maps(
             MapKind::Caustic => (&mut maps.caustic, "caustic photons"),
             MapKind::Global { .. } => (&mut maps.global, "global photons"),
         };
-        let target = pass_target(&info, schedule, pass);
+        let target = pass_target(&info, &schedule.growth, pass);
         let bar = progress(target, what);
         let start = Instant::now();
         let max_paths = match info.kind {

@@ -56,7 +56,7 @@ impl TensorHistory {
             if self.passes.iter().any(|(p, _)| *p == earlier) {
                 continue;
             }
-            let target = pass_target(&info, schedule, earlier);
+            let target = pass_target(&info, &schedule.growth, earlier);
             let bar = progress(target, "caustic photons of an earlier pass");
             let start = Instant::now();
             let (map, counts) = trace_map(
