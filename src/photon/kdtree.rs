@@ -433,6 +433,74 @@ impl<F: FnMut(usize, std::ops::Range<usize>)> Search for LeavesWithin<F> {
 mod tests {
     use super::*;
 
+    /// Every leaf whose cell (the points' box cut by the splits above it) lies within the
+    /// radius, in slot order, found cell by cell.
+    fn leaves_within_by_brute_force(tree: &KdTree, q: Vec3, radius2: f32) -> Vec<usize> {
+        (0..tree.leaf_base())
+            .filter(|&leaf| {
+                let (mut lower, mut upper) = (tree.lower.to_array(), tree.upper.to_array());
+                let node = tree.leaf_base() + leaf;
+                for level in (0..tree.depth).rev() {
+                    let (parent, child) = (node >> (level + 1), node >> level);
+                    let axis = usize::from(tree.axes[parent]);
+                    if child == 2 * parent {
+                        upper[axis] = tree.splits[parent];
+                    } else {
+                        lower[axis] = tree.splits[parent];
+                    }
+                }
+                let q = q.to_array();
+                let near: f32 = (0..3)
+                    .map(|a| (lower[a] - q[a]).max(q[a] - upper[a]).max(0.0))
+                    .map(|d| d * d)
+                    .sum();
+                near <= radius2
+            })
+            .collect()
+    }
+
+    #[test]
+    fn leaves_within_a_radius_are_every_leaf_whose_cell_it_reaches_in_slot_order() {
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        // A volume, and a plane with a dense strip (photons on a floor, a caustic on it).
+        let cloud: Vec<Vec3> = (0..3000)
+            .map(|_| Vec3::new(next(), next(), next()))
+            .collect();
+        let floor: Vec<Vec3> = (0..5000)
+            .map(|i| {
+                let x = next();
+                let z = if i % 2 == 0 {
+                    0.5 + 0.02 * next()
+                } else {
+                    next()
+                };
+                Vec3::new(x, 0.0, z)
+            })
+            .collect();
+        for points in [cloud, floor] {
+            let tree = KdTree::build(&points);
+            for i in 0..400 {
+                let q = Vec3::new(1.4 * next() - 0.2, 0.3 * next() - 0.1, 1.4 * next() - 0.2);
+                let radius = [0.01, 0.05, 0.2, 2.0][i % 4] * next();
+                let mut found = Vec::new();
+                tree.for_each_leaf_within(q, radius * radius, |leaf, slots| {
+                    assert_eq!(slots, tree.node_slots(tree.leaf_base() + leaf));
+                    found.push(leaf);
+                });
+                assert_eq!(
+                    found,
+                    leaves_within_by_brute_force(&tree, q, radius * radius)
+                );
+            }
+        }
+    }
+
     #[test]
     fn cell_bound_never_exceeds_a_point_distance_in_floats() {
         // A point just beyond a split plane on two axes: the cell bound uses the plane, the
