@@ -1,13 +1,12 @@
 //! Where a pixel's samples go: the sample positions of every (seed, pass, pixel, sample).
 //! Pixel positions and lens points come from one Owen-scrambled 4-D Sobol sequence per pixel
-//! (Burley 2020, the `sobol_burley` crate: dimensions 0–1 the position in the pixel, 2–3 the
-//! lens), indexed by `pass · spp + sample`: the passes of a progressive run keep stratifying
-//! the same pixel and aperture instead of repeating its first sample, and pixels are
-//! decorrelated by their own scramble. A pixel is its full-film index
-//! ([`super::RayCamera::pixel_key`]). Light
-//! samples and final-gather directions come from the pixel's [`EyeSequence`] (one scrambled
-//! sequence per pixel and purpose, the same index, `R` consecutive points for `R` samples at a
-//! hit). Everything else a path draws comes from a PCG stream keyed by the same four numbers.
+//! (Burley 2020, the `sobol_burley` crate's numbers from `sampling::sobol`: dimensions 0–1 the
+//! position in the pixel, 2–3 the lens), indexed by `pass · spp + sample`: the passes of a
+//! progressive run keep stratifying the same pixel and aperture instead of repeating its first
+//! sample, and pixels are decorrelated by their own scramble. A pixel is its full-film index
+//! ([`super::RayCamera::pixel_key`]). Light samples and final-gather directions come from the
+//! pixel's [`EyeSequence`] (one scrambled sequence per pixel and purpose, the same index, `R`
+//! consecutive points for `R` samples at a hit). Everything else a path draws comes from a PCG stream keyed by the same four numbers.
 //! Owns sample placement; must not shade or accumulate.
 
 use crate::sampling::{EyeSequence, Rng, SOBOL_BLOCK, Stream, StreamSeed, pass_seed};
@@ -78,7 +77,7 @@ impl PassSamples {
         let scramble = StreamSeed::new(self.seed, stream)
             .rng(pixel ^ (index / SOBOL_BLOCK).wrapping_mul(0x9E37_79B9_7F4A_7C15))
             .next_u32();
-        sobol_burley::sample_4d((index % SOBOL_BLOCK) as u32, 0, scramble)
+        crate::sampling::sobol::sample_4d((index % SOBOL_BLOCK) as u32, scramble)
     }
 
     /// Sample `s` (< spp) of pixel `pixel` (full-film row-major index) in this pass.

@@ -2,6 +2,8 @@
 //! path and every pixel sample draws from its own generator, seeded from (seed, stream, index),
 //! so results never depend on the thread count. Owns numbers, not rays or scenes.
 
+pub mod sobol;
+
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -46,7 +48,7 @@ pub fn pass_seed(seed: u64, pass: u64) -> u64 {
     }
 }
 
-/// Longest run of one Owen-scrambled Sobol sequence `sobol_burley` supports; longer runs take
+/// Longest run of one Owen-scrambled Sobol sequence ([`sobol`]); longer runs take
 /// a fresh scramble per block of this many.
 pub const SOBOL_BLOCK: u64 = 1 << 16;
 
@@ -81,8 +83,7 @@ impl EyeSequence {
         debug_assert!(j < count);
         let i = self.index * count as u64 + j as u64;
         let seed = mix(self.key ^ purpose, i / SOBOL_BLOCK) as u32;
-        // The four-lane form shares the index shuffle and gives the same two numbers.
-        let [u, v, _, _] = sobol_burley::sample_4d((i % SOBOL_BLOCK) as u32, 0, seed);
+        let [u, v] = sobol::sample_2d((i % SOBOL_BLOCK) as u32, seed);
         (u, v)
     }
 }
