@@ -22,7 +22,7 @@ fn points(c: &mut Criterion) {
         b.iter(|| {
             let mut sum = 0.0f32;
             for i in 0..BATCH {
-                let p = sobol_burley::sample_4d(black_box(i * 13 & 0xffff), 0, seed_of(i));
+                let p = sobol_burley::sample_4d(black_box((i * 13) & 0xffff), 0, seed_of(i));
                 sum += p[0] + p[1] + p[2] + p[3];
             }
             sum
@@ -32,7 +32,7 @@ fn points(c: &mut Criterion) {
         b.iter(|| {
             let mut sum = 0.0f32;
             for i in 0..BATCH {
-                let p = sobol::sample_4d(black_box(i * 13 & 0xffff), seed_of(i));
+                let p = sobol::sample_4d(black_box((i * 13) & 0xffff), seed_of(i));
                 sum += p[0] + p[1] + p[2] + p[3];
             }
             sum
@@ -42,7 +42,7 @@ fn points(c: &mut Criterion) {
         b.iter(|| {
             let mut sum = 0.0f32;
             for i in 0..BATCH {
-                let p = sobol::sample_2d(black_box(i * 13 & 0xffff), seed_of(i));
+                let p = sobol::sample_2d(black_box((i * 13) & 0xffff), seed_of(i));
                 sum += p[0] + p[1];
             }
             sum
