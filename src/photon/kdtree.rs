@@ -461,13 +461,9 @@ mod tests {
 
     #[test]
     fn leaves_within_a_radius_are_every_leaf_whose_cell_it_reaches_in_slot_order() {
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        use crate::sampling::{Rng, Stream};
+        let mut rng = Rng::for_index(1, Stream::Distribution, 0);
+        let mut next = || rng.next_f32();
         // A volume, and a plane with a dense strip (photons on a floor, a caustic on it).
         let cloud: Vec<Vec3> = (0..3000)
             .map(|_| Vec3::new(next(), next(), next()))

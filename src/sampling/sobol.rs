@@ -78,13 +78,8 @@ mod tests {
 
     #[test]
     fn every_point_is_the_crates_to_the_bit() {
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 32) as u32
-        };
+        let mut rng = super::super::Rng::for_index(1, super::super::Stream::Distribution, 0);
+        let mut next = || rng.next_u32();
         let edges = [0, 1, 2, 255, 256, 4095, 32_768, 65_534, 65_535];
         for i in 0..200_000 {
             let index = if i < edges.len() {

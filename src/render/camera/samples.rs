@@ -6,8 +6,8 @@
 //! sample, and pixels are decorrelated by their own scramble. A pixel is its full-film index
 //! ([`super::RayCamera::pixel_key`]). Light samples and final-gather directions come from the
 //! pixel's [`EyeSequence`] (one scrambled sequence per pixel and purpose, the same index, `R`
-//! consecutive points for `R` samples at a hit). Everything else a path draws comes from a PCG stream keyed by the same four numbers.
-//! Owns sample placement; must not shade or accumulate.
+//! consecutive points for `R` samples at a hit). Everything else a path draws comes from a PCG
+//! stream keyed by the same four numbers. Owns sample placement; must not shade or accumulate.
 
 use crate::sampling::{EyeSequence, Rng, SOBOL_BLOCK, Stream, StreamSeed, pass_seed};
 
