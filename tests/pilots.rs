@@ -46,10 +46,24 @@ fn plan(text: &str, emission: u32, edge: u32) -> PixelPlan {
     plan_of(description(text), emission, edge)
 }
 
+/// The plan of 16 emission samples, seeking light images or not.
+fn plan_with(text: &str, light_images: bool) -> PixelPlan {
+    let desc = description(text);
+    let camera = RayCamera::new(&desc.camera);
+    let world = dpm::world::World::new(desc).expect("world");
+    in_pool(2, || {
+        PixelPlan::survey(&camera, &world, 10, 16, 0, light_images)
+    })
+    .expect("not interrupted")
+}
+
 fn plan_of(desc: dpm::scene::SceneDescription, emission: u32, edge: u32) -> PixelPlan {
     let camera = RayCamera::new(&desc.camera);
     let world = dpm::world::World::new(desc).expect("world");
-    in_pool(2, || PixelPlan::survey(&camera, &world, 10, emission, edge)).expect("not interrupted")
+    in_pool(2, || {
+        PixelPlan::survey(&camera, &world, 10, emission, edge, true)
+    })
+    .expect("not interrupted")
 }
 
 fn flagged(plan: &PixelPlan, which: impl Fn(&PixelPlan, usize) -> bool) -> Vec<(usize, usize)> {
@@ -116,6 +130,48 @@ fn a_mirror_flags_only_where_it_reflects_a_light() {
     );
     // With every pixel counting its own emission, nothing is flagged.
     assert!(emission(&plan(&text, 0, 4)).is_empty());
+}
+
+/// The light images a flagged pixel aims at: a sphere light a fifth of a pixel across seen
+/// directly, and one seen in a flat mirror, each found where its centre projects, as an
+/// ellipse of the light's disc reached twice over (so π (2 · 0.1)² square pixels), and in
+/// no pixel that does not hold that centre.
+#[test]
+fn newton_finds_a_small_lights_image_where_its_centre_projects() {
+    // Directly at depth 5 inside pixel (20, 11); in the mirror at z = 0 a light at z = 20 is
+    // seen 30 units away, inside pixel (9, 24), its radius a tenth of a pixel there too.
+    for (depth, z, column, row, material) in [
+        (5.0, 5.0, 20.3, 11.3, "grey"),
+        (30.0, 20.0, 9.55, 24.6, "chrome"),
+    ] {
+        let pixel_size = world_x(1.0, depth) - world_x(0.0, depth);
+        let (cx, cy) = (world_x(column, depth), -world_x(row, depth));
+        let light = format!(
+            "[[lights]]\ntype = \"sphere\"\ncenter = [{cx}, {cy}, {z}]\nradius = {}\n\
+             power = [10.0, 10.0, 10.0]\n",
+            0.1 * pixel_size
+        );
+        let text = scene(&light, &quad_left_of(50.0, 0.0, material));
+        let planned = plan(&text, 16, 0);
+        let (x, y) = (column as usize, row as usize);
+        let images = planned.light_images(y * SIDE + x);
+        assert_eq!(images.len(), 1, "{material}: {images:?}");
+        let found = images[0].centre();
+        assert!(
+            (found.x as f64 - column).abs() < 1e-3 && (found.y as f64 - row).abs() < 1e-3,
+            "{material}: {found} against ({column}, {row})"
+        );
+        let area = PI * 0.2 * 0.2;
+        assert!(
+            (images[0].area() as f64 - area).abs() < 0.02 * area,
+            "{images:?}"
+        );
+        assert_eq!(planned.aimed_pixels(), 1, "{material}");
+        // Without light images every emission sample spreads.
+        let spread = plan_with(&text, false);
+        assert!(spread.light_images(y * SIDE + x).is_empty());
+        assert!(spread.emission_apart(y * SIDE + x));
+    }
 }
 
 /// A grey quad covering x < edge against the empty background, lit by a point light: the

@@ -232,6 +232,15 @@ pub struct RenderArgs {
           help_heading = headings::EYE, hide_short_help = true)]
     pub emission_samples: u32,
 
+    /// Spread every emission sample across its pixel: seek no light images.
+    ///
+    /// By default the pilots of a pixel that samples its emission apart seek, by Newton's
+    /// method along their own mirror and glass chains, the points of the pixel where a light's
+    /// centre is seen, and half of its emission samples aim at the images there, weighed
+    /// against the spread half by the balance heuristic (the same expectation).
+    #[arg(long, help_heading = headings::EYE, hide_short_help = true)]
+    pub no_light_images: bool,
+
     /// Camera samples per pass in the pixels that hold an edge.
     ///
     /// An edge pixel is one whose pilot rays (its centre and corners, traced once per

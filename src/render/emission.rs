@@ -10,20 +10,37 @@
 //! ([`super::pilots::PixelPlan`]). Owns the emission samples' estimate; must not choose the
 //! pixels or shade diffuse surfaces.
 
-use super::camera::CameraRay;
+use super::camera::{EmissionSample, RayCamera};
 use super::integrator::Integrator;
-use glam::Vec3;
+use super::light_images::Aim;
+use glam::{Vec2, Vec3};
 
-/// The mean of a flagged pixel's emission samples: their camera rays (through the pixel and
-/// the lens, as its camera samples go), each with the random stream for its glass choices.
+/// The mean of a flagged pixel's emission samples, the pixel's film corner at `pixel`: each
+/// placed as `aim` says (across the pixel as its camera samples go, or at a light image
+/// found in it) and weighed so, through the lens at the sample's lens point, with the
+/// sample's random stream for its glass choices.
 pub fn emitted_mean(
     integrator: &Integrator,
-    samples: impl ExactSizeIterator<Item = (CameraRay, crate::sampling::Rng)>,
+    camera: &RayCamera,
+    aim: &Aim,
+    pixel: Vec2,
+    samples: impl ExactSizeIterator<Item = EmissionSample>,
 ) -> Vec3 {
     let n = samples.len().max(1) as f32;
     let mut sum = Vec3::ZERO;
-    for (ray, mut rng) in samples {
-        sum += integrator.emitted(ray.origin, ray.direction, &mut rng);
+    for (j, sample) in samples.enumerate() {
+        let Some((x, along)) = aim.point(j as u32, sample.jitter, pixel) else {
+            continue;
+        };
+        let ray = camera.ray(x.x, x.y, sample.lens);
+        let mut rng = sample.rng;
+        if aim.aims() {
+            let seen = integrator.emitted_chain(ray.origin, ray.direction, &mut rng, along);
+            sum += aim.weight(x, seen.code, seen.probability) * seen.value;
+        } else {
+            sum += integrator.emitted(ray.origin, ray.direction, &mut rng);
+        }
     }
-    sum / n
+    // Spread samples alone weigh 1/n each: summed first, as before aiming.
+    if aim.aims() { sum } else { sum / n }
 }

@@ -306,6 +306,118 @@ impl Integrator<'_> {
         Vec3::ZERO
     }
 
+    /// What [`Self::emitted`] sees, and which chain it saw it along: the reflect (0) and
+    /// refract (1) choices as a pilot's branch code (0 where a BSDF's delta lobe or depth made
+    /// it no pilot's), and the probability that chain's choices had at their film point. With
+    /// `along` the choices are not drawn but those of that code, and the chain ends after its
+    /// last choice: it sees only a light or the environment there.
+    pub fn emitted_chain(
+        &self,
+        mut origin: Vec3,
+        mut dir: Vec3,
+        rng: &mut crate::sampling::Rng,
+        along: Option<u64>,
+    ) -> EmittedChain {
+        let mut chain = EmittedChain {
+            value: Vec3::ZERO,
+            code: 1,
+            probability: 1.0,
+        };
+        let mut throughput = Vec3::ONE;
+        let forced = along.map(|code| 63 - code.max(1).leading_zeros());
+        let bounces = forced.unwrap_or(self.max_depth);
+        for bounce in 0..=bounces {
+            // A forced chain sees only what its last ray meets: a shorter chain is another
+            // chain, which the forced strategy never samples.
+            let early = forced.is_some() && bounce < bounces;
+            let hit = self.world.intersect(origin, dir, 0.0, f32::INFINITY);
+            if early
+                && hit
+                    .as_ref()
+                    .is_none_or(|h| matches!(h.surface, Surface::Light(_)))
+            {
+                return chain;
+            }
+            let Some(hit) = hit else {
+                chain.value = throughput * self.world.background(dir);
+                return chain;
+            };
+            let m = match hit.surface {
+                Surface::Light(l) => {
+                    let light = &self.world.light_sources[l];
+                    chain.value =
+                        throughput * light.emitted_radiance(-dir.dot(hit.geometric_normal));
+                    return chain;
+                }
+                Surface::Material(m) => m,
+            };
+            if bounce == bounces {
+                break;
+            }
+            let (ng, ns) = hit.facing(dir);
+            let material = &self.world.material_at(m, &hit);
+            let reflectance = |ior: f32| {
+                let eta = if hit.entering(dir) { 1.0 / ior } else { ior };
+                (eta, fresnel_dielectric(-dir.dot(ns), eta))
+            };
+            let (next, tint, refracts) = match (along, material) {
+                (Some(code), _) => {
+                    let refracts = (code >> (forced.unwrap_or(0) - 1 - bounce)) & 1 == 1;
+                    match material {
+                        Material::Mirror { tint } if !refracts => (reflect(dir, ns), *tint, false),
+                        Material::Glass {
+                            ior,
+                            reflect_tint,
+                            transmit_tint,
+                        } => {
+                            let (eta, f) = reflectance(*ior);
+                            if refracts {
+                                let Some(t) = refract(dir, ns, eta) else {
+                                    return chain;
+                                };
+                                chain.probability *= 1.0 - f;
+                                (t, *transmit_tint, true)
+                            } else {
+                                chain.probability *= f;
+                                (reflect(dir, ns), *reflect_tint, false)
+                            }
+                        }
+                        _ => return chain,
+                    }
+                }
+                (None, _) => {
+                    let Some((next, tint)) =
+                        sampled_specular(self.world, material, &hit, dir, ns, rng)
+                    else {
+                        return chain;
+                    };
+                    let refracts = next.dot(ns) * dir.dot(ns) > 0.0;
+                    match material {
+                        Material::Mirror { .. } => {}
+                        Material::Glass { ior, .. } => {
+                            let (_, f) = reflectance(*ior);
+                            chain.probability *= if refracts { 1.0 - f } else { f };
+                        }
+                        // No pilot follows a BSDF's lobes.
+                        _ => chain.code = 0,
+                    }
+                    (next, tint, refracts)
+                }
+            };
+            if chain.code != 0 {
+                chain.code = if chain.code.leading_zeros() == 0 {
+                    0
+                } else {
+                    chain.code << 1 | u64::from(refracts)
+                };
+            }
+            throughput *= tint;
+            origin = self.spawn(hit.position, ng, next);
+            dir = next;
+        }
+        chain
+    }
+
     pub(super) fn offset(&self, p: Vec3, n: Vec3) -> Vec3 {
         p + n * self.world.ray_epsilon()
     }
@@ -346,6 +458,15 @@ impl Integrator<'_> {
         }
         e
     }
+}
+
+/// The light one emission sample saw, and along which chain ([`Integrator::emitted_chain`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmittedChain {
+    /// Radiance times the chain's tints, not divided by its probability.
+    pub value: Vec3,
+    pub code: u64,
+    pub probability: f32,
 }
 
 /// Where a path that meets `material` at `hit` along `dir` (shading normal `ns`, facing the

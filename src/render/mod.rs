@@ -22,6 +22,7 @@ pub mod film_file;
 mod gather;
 pub mod integrator;
 pub mod kernel_probe;
+pub mod light_images;
 pub mod memory_budget;
 pub mod merge;
 pub mod output;

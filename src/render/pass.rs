@@ -24,6 +24,7 @@ use super::film::{KERNEL_CHANNELS, PassImage, RGB_LAYERS};
 use super::integrator::Emission;
 use super::integrator::{EstimatedMap, Indirect, Integrator, Radiance};
 use super::kernel_probe::KernelProbe;
+use super::light_images::Aim;
 use super::pilots::PixelPlan;
 use super::schedule::{PhotonGrowth, Schedule, pass_estimator};
 use crate::estimate::classic::KnnEstimate;
@@ -77,6 +78,10 @@ pub struct RenderSettings {
     /// Films written before it existed counted it in their camera samples.
     #[serde(default)]
     pub emission_samples: u32,
+    /// Whether half of those samples aim at the light images found in a pixel
+    /// (`render::light_images`). Films written before it existed spread them all.
+    #[serde(default)]
+    pub light_images: bool,
     /// Camera samples per pass in the pixels whose pilot rays find an edge
     /// (`render::pilots`); 0: they take `spp` like the rest. Films written before it existed
     /// took `spp` everywhere.
@@ -570,12 +575,10 @@ pub fn shade_pass(
                 let mut mean = (1.0 / count.max(1) as f32) * sum;
                 if let Some(p) = apart {
                     let n = p.emission_samples();
-                    let at = (0..n).map(|j| {
-                        let sample = samples.emission_sample(key, j, n);
-                        let (jx, jy) = sample.jitter;
-                        (camera.ray(fx + jx, fy + jy, sample.lens), sample.rng)
-                    });
-                    mean.direct += emitted_mean(integrator, at);
+                    let aim = Aim::new(p.light_images(pixel), n);
+                    let at = (0..n).map(|j| samples.emission_sample(key, j, n));
+                    let corner = glam::Vec2::new(fx, fy);
+                    mean.direct += emitted_mean(integrator, camera, &aim, corner, at);
                 }
                 for (i, v) in [mean.total(), mean.direct, mean.caustic, mean.indirect]
                     .iter()

@@ -19,11 +19,12 @@
 //! that plan; must not shade or estimate.
 
 use super::camera::RayCamera;
+use super::light_images::{self, LightImage, Seed};
 use crate::optics::{fresnel_dielectric, reflect, refract};
 use crate::scene::Material;
 use crate::world::lights::LightShape;
 use crate::world::{BoundingSphere, Surface, World};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 /// Per pixel of an image, how its samples are spent in every pass.
@@ -35,6 +36,10 @@ pub struct PixelPlan {
     emission_samples: u32,
     /// Camera samples per pass in edge pixels (0: edges take the render's `spp` too).
     edge_samples: u32,
+    /// The light images of emission pixels, by pixel in ascending order (`image_pixels[i]`
+    /// holds `images[i]`).
+    image_pixels: Vec<u32>,
+    images: Vec<LightImage>,
 }
 
 const EMISSION: u8 = 1;
@@ -42,20 +47,24 @@ const EDGE: u8 = 2;
 
 impl PixelPlan {
     /// The plan for `camera`'s pixels: pilots follow mirrors and glass for `max_depth`
-    /// bounces, as camera paths do. With both counts 0 no pilot is traced. `None` if an
-    /// interruption was requested meanwhile.
+    /// bounces, as camera paths do; with `light_images` they seek the light images of the
+    /// pixels that sample their emission apart. With both counts 0 no pilot is traced. `None`
+    /// if an interruption was requested meanwhile.
     pub fn survey(
         camera: &RayCamera,
         world: &World,
         max_depth: u32,
         emission_samples: u32,
         edge_samples: u32,
+        light_images: bool,
     ) -> Option<Self> {
         let (w, h) = (camera.width(), camera.height());
         let mut plan = Self {
             flags: vec![0; w * h],
             emission_samples,
             edge_samples,
+            image_pixels: Vec::new(),
+            images: Vec::new(),
         };
         if emission_samples == 0 && edge_samples == 0 {
             return Some(plan);
@@ -100,7 +109,50 @@ impl PixelPlan {
                 *flags |= EDGE;
             }
         }
+        // Aimed samples need a share of at least one.
+        if light_images && emission_samples >= 2 {
+            let flagged: Vec<usize> = (0..w * h).filter(|&p| plan.emission_apart(p)).collect();
+            let found: Vec<Vec<LightImage>> = flagged
+                .par_iter()
+                .map(|&pixel| {
+                    let (x, y) = (pixel % w, pixel / w);
+                    let (fx, fy) = camera.film_pixel(x, y);
+                    let corner = Vec2::new(fx as f32, fy as f32);
+                    let pilots = [
+                        (&centres[y][x], Vec2::splat(0.5)),
+                        (&corners[y][x], Vec2::ZERO),
+                        (&corners[y][x + 1], Vec2::X),
+                        (&corners[y + 1][x], Vec2::Y),
+                        (&corners[y + 1][x + 1], Vec2::ONE),
+                    ];
+                    let seeds = survey.seeds(&pilots, corner);
+                    light_images::find(world, camera, corner, &seeds)
+                })
+                .collect();
+            for (&pixel, images) in flagged.iter().zip(found) {
+                for image in images {
+                    plan.image_pixels.push(pixel as u32);
+                    plan.images.push(image);
+                }
+            }
+        }
         Some(plan)
+    }
+
+    /// The light images found in `pixel` (row-major), where its emission samples aim.
+    pub fn light_images(&self, pixel: usize) -> &[LightImage] {
+        let start = self.image_pixels.partition_point(|&p| (p as usize) < pixel);
+        let end = self
+            .image_pixels
+            .partition_point(|&p| (p as usize) <= pixel);
+        &self.images[start..end]
+    }
+
+    /// Pixels whose emission samples aim at a light image.
+    pub fn aimed_pixels(&self) -> usize {
+        let mut pixels = self.image_pixels.clone();
+        pixels.dedup();
+        pixels.len()
     }
 
     /// Whether `pixel` (row-major) samples the light along its mirror and glass chains apart.
@@ -261,15 +313,66 @@ impl<'w> Survey<'w> {
             }
         }
         pilot.last_rays = (last_rays.iter())
-            .map(|&(o, d, code)| LastRay {
-                code,
-                direction: d,
-                light_gap: (self.visible.iter())
+            .map(|&(o, d, code)| {
+                let (light, light_gap) = (self.visible.iter())
                     .map(|light| gap_to_sphere(o, d, light))
-                    .fold(f32::INFINITY, f32::min),
+                    .enumerate()
+                    .fold((u32::MAX, f32::INFINITY), |best, (i, gap)| {
+                        if gap < best.1 { (i as u32, gap) } else { best }
+                    });
+                LastRay {
+                    code,
+                    origin: o,
+                    direction: d,
+                    light_gap,
+                    light,
+                }
             })
             .collect();
         pilot
+    }
+
+    /// Where a pixel's search for light images starts: its pilots' last rays (each pilot
+    /// with its offset in the pixel whose film corner is `corner`), one per chain and light,
+    /// nearest the light first.
+    fn seeds(&self, pilots: &[(&Pilot, Vec2); 5], corner: Vec2) -> Vec<Seed> {
+        let rays = || pilots.iter().flat_map(|(p, _)| p.last_rays.iter());
+        let whole = widest(rays());
+        let mut near: Vec<(&LastRay, Vec2)> = (pilots.iter())
+            .flat_map(|(p, offset)| p.last_rays.iter().map(move |r| (r, *offset)))
+            .filter(|(r, _)| r.light != u32::MAX && r.light_gap <= SPREAD_MARGIN * whole)
+            .collect();
+        near.sort_by(|a, b| a.0.light_gap.total_cmp(&b.0.light_gap));
+        let mut seeds: Vec<(Seed, u32)> = Vec::new();
+        for (ray, offset) in near {
+            if seeds.len() == light_images::MAX_SEEDS {
+                break;
+            }
+            if seeds
+                .iter()
+                .any(|(s, l)| s.code == ray.code.0 && *l == ray.light)
+            {
+                continue;
+            }
+            // As for the flag: a light further from a ray than its branch's spread across
+            // the pixel allows is seen elsewhere, and Newton's method would leave the pixel.
+            let matched =
+                (pilots.iter()).all(|(p, _)| p.last_rays.iter().any(|r| r.code == ray.code));
+            if matched
+                && ray.light_gap > SPREAD_MARGIN * widest(rays().filter(|r| r.code == ray.code))
+            {
+                continue;
+            }
+            let seed = Seed {
+                film: corner + offset,
+                code: ray.code.0,
+                target: self.visible[ray.light as usize],
+                sees: ray.light_gap <= 0.0,
+                last_ray: (ray.origin, ray.direction),
+            };
+            seeds.push((seed, ray.light));
+        }
+        seeds.into_iter().map(|(s, _)| s).collect()
     }
 
     /// Which of the lights' probe points the diffuse point `p` (normal `n`) sees, one bit each.
@@ -381,10 +484,13 @@ impl BranchCode {
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct LastRay {
     code: BranchCode,
+    origin: Vec3,
     direction: Vec3,
     /// How near it passes a light's bounding sphere ([`gap_to_sphere`]: at most the angle in
     /// radians; negative inside the sphere; infinite without visible lights).
     light_gap: f32,
+    /// Which of the visible spheres that gap is to (`u32::MAX`: none).
+    light: u32,
 }
 
 /// What one pilot ray learns.
@@ -528,8 +634,10 @@ mod tests {
             last_rays: (rays.iter())
                 .map(|&(code, a, gap)| LastRay {
                     code,
+                    origin: Vec3::ZERO,
                     direction: Vec3::new(a.sin(), 0.0, a.cos()),
                     light_gap: gap,
+                    light: 0,
                 })
                 .collect(),
             ..Pilot::default()

@@ -275,6 +275,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         light_samples: args.light_samples,
         glass_split_depth: args.glass_split_depth,
         emission_samples: args.emission_samples,
+        light_images: !args.no_light_images,
         edge_samples: args.edge_samples,
         guide_paths: if args.caustic_photons > 0 {
             args.guide_paths
@@ -306,12 +307,14 @@ pub fn survey_pixels(
             settings.max_depth,
             settings.emission_samples,
             settings.edge_samples,
+            settings.light_images,
         )
     })?;
     times.add_counts(
         "pilot rays",
         &[
             ("emission pixels", plan.emission_pixels() as u64),
+            ("aimed", plan.aimed_pixels() as u64),
             ("edge pixels", plan.edge_pixels() as u64),
         ],
     );

@@ -14,7 +14,7 @@ mod samples;
 #[cfg(test)]
 mod tests;
 
-pub use samples::{CameraSample, PassSamples};
+pub use samples::{CameraSample, EmissionSample, PassSamples};
 
 use crate::sampling::uniform_disc;
 use crate::scene::{self, Handedness, Projection, ThinLens};
