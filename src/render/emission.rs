@@ -6,7 +6,8 @@
 //! samples of that light alone (a few rays each, glass sampled, no estimates:
 //! [`Integrator::emitted`]) while their camera samples leave it out
 //! ([`super::integrator::Emission::Elsewhere`]): the same expectation, far less variance per
-//! second. Which pixels do so is decided once per render by the pilot rays
+//! second; half of them aim at the light images the pilots found in the pixel
+//! ([`super::light_images`]). Which pixels do so is decided once per render by the pilot rays
 //! ([`super::pilots::PixelPlan`]). Owns the emission samples' estimate; must not choose the
 //! pixels or shade diffuse surfaces.
 

@@ -6,11 +6,14 @@
 //! flagged pixel, Newton's method moves a pilot's film point along the pilot's own chain of
 //! reflect and refract choices until the chain's last ray passes through a light's centre;
 //! the chain's Jacobian there (film offset to miss distance at the light) maps the light's
-//! disc back onto the film as an ellipse. In every pass half of the pixel's emission samples
-//! go to those ellipses and half across the pixel as before, and every sample is weighed by
-//! the balance heuristic over both groups (multi-sample importance sampling): the estimate's
-//! expectation is the pixel's whatever an ellipse misses, since the spread half covers the
-//! whole pixel. Owns the image search and the samples' placement and weights; must not flag
+//! disc back onto the film as an ellipse. Where the ellipse would be larger than the pixel, or
+//! no centre is found though the chain met the light near the pixel (a reflection in glass,
+//! chosen one time in twenty, is a lottery of its own), the whole pixel along that chain is
+//! the target instead. In every pass half of the pixel's emission samples go to the targets,
+//! each forced along its chain, and half across the pixel as before, and every sample is
+//! weighed by the balance heuristic over both groups (multi-sample importance sampling): the
+//! estimate's expectation is the pixel's whatever a target misses, since the spread half
+//! covers the whole pixel and every chain. Owns the image search and the samples' placement and weights; must not flag
 //! pixels ([`super::pilots`]), trace the emission ([`super::emission`]) or shade.
 
 use super::camera::RayCamera;
