@@ -36,7 +36,7 @@ const TOLERANCE: f32 = 0.02;
 const REACH: f32 = 2.0;
 /// An ellipse larger than this (in pixels) is no target: the whole pixel aims at its chain
 /// instead.
-const MAX_ELLIPSE_AREA: f32 = 1.0;
+pub const MAX_ELLIPSE_AREA: f32 = 1.0;
 /// Images kept per pixel at most.
 pub const MAX_IMAGES: usize = 4;
 /// Seeds tried per pixel at most, nearest their light first.
