@@ -324,8 +324,8 @@ impl Integrator<'_> {
             probability: 1.0,
         };
         let mut throughput = Vec3::ONE;
-        let forced = along.map(|code| 63 - code.max(1).leading_zeros());
-        let bounces = forced.unwrap_or(self.max_depth);
+        let mut forced = along.map(super::light_images::chain_choices);
+        let bounces = forced.as_ref().map_or(self.max_depth, |c| c.len() as u32);
         for bounce in 0..=bounces {
             // A forced chain sees only what its last ray meets: a shorter chain is another
             // chain, which the forced strategy never samples.
@@ -356,53 +356,31 @@ impl Integrator<'_> {
             }
             let (ng, ns) = hit.facing(dir);
             let material = &self.world.material_at(m, &hit);
-            let reflectance = |ior: f32| {
-                let eta = if hit.entering(dir) { 1.0 / ior } else { ior };
-                (eta, fresnel_dielectric(-dir.dot(ns), eta))
-            };
-            let (next, tint, refracts) = match (along, material) {
-                (Some(code), _) => {
-                    let refracts = (code >> (forced.unwrap_or(0) - 1 - bounce)) & 1 == 1;
-                    match material {
-                        Material::Mirror { tint } if !refracts => (reflect(dir, ns), *tint, false),
-                        Material::Glass {
-                            ior,
-                            reflect_tint,
-                            transmit_tint,
-                        } => {
-                            let (eta, f) = reflectance(*ior);
-                            if refracts {
-                                let Some(t) = refract(dir, ns, eta) else {
-                                    return chain;
-                                };
-                                chain.probability *= 1.0 - f;
-                                (t, *transmit_tint, true)
-                            } else {
-                                chain.probability *= f;
-                                (reflect(dir, ns), *reflect_tint, false)
-                            }
-                        }
-                        _ => return chain,
+            let (next, tint, refracts) = if let Some(choices) = forced.as_mut() {
+                let refracts = choices.next().unwrap_or(false);
+                let Some((next, tint, p)) = chosen_specular(material, &hit, dir, ns, refracts)
+                else {
+                    return chain;
+                };
+                chain.probability *= p;
+                (next, tint, refracts)
+            } else {
+                let Some((next, tint)) = sampled_specular(self.world, material, &hit, dir, ns, rng)
+                else {
+                    return chain;
+                };
+                let refracts = next.dot(ns) * dir.dot(ns) > 0.0;
+                match material {
+                    Material::Mirror { .. } => {}
+                    Material::Glass { ior, .. } => {
+                        let eta = if hit.entering(dir) { 1.0 / ior } else { *ior };
+                        let f = fresnel_dielectric(-dir.dot(ns), eta);
+                        chain.probability *= if refracts { 1.0 - f } else { f };
                     }
+                    // No pilot follows a BSDF's lobes.
+                    _ => chain.code = 0,
                 }
-                (None, _) => {
-                    let Some((next, tint)) =
-                        sampled_specular(self.world, material, &hit, dir, ns, rng)
-                    else {
-                        return chain;
-                    };
-                    let refracts = next.dot(ns) * dir.dot(ns) > 0.0;
-                    match material {
-                        Material::Mirror { .. } => {}
-                        Material::Glass { ior, .. } => {
-                            let (_, f) = reflectance(*ior);
-                            chain.probability *= if refracts { 1.0 - f } else { f };
-                        }
-                        // No pilot follows a BSDF's lobes.
-                        _ => chain.code = 0,
-                    }
-                    (next, tint, refracts)
-                }
+                (next, tint, refracts)
             };
             if chain.code != 0 {
                 chain.code = if chain.code.leading_zeros() == 0 {
@@ -467,6 +445,37 @@ pub struct EmittedChain {
     pub value: Vec3,
     pub code: u64,
     pub probability: f32,
+}
+
+/// Where a chain that meets `material` at `hit` along `dir` (shading normal `ns`, facing the
+/// ray) goes on when it takes the choice `refracts`, the tint it takes, and the probability
+/// [`sampled_specular`] gives that choice (the Fresnel reflectance or its complement; 1 at
+/// a mirror). `None` where the choice cannot be taken: a mirror asked to refract, total
+/// internal reflection, a surface neither mirror nor glass.
+pub(super) fn chosen_specular(
+    material: &Material,
+    hit: &crate::world::Interaction,
+    dir: Vec3,
+    ns: Vec3,
+    refracts: bool,
+) -> Option<(Vec3, Vec3, f32)> {
+    match material {
+        Material::Mirror { tint } if !refracts => Some((reflect(dir, ns), *tint, 1.0)),
+        Material::Glass {
+            ior,
+            reflect_tint,
+            transmit_tint,
+        } => {
+            let eta = if hit.entering(dir) { 1.0 / ior } else { *ior };
+            let f = fresnel_dielectric(-dir.dot(ns), eta);
+            if refracts {
+                Some((refract(dir, ns, eta)?, *transmit_tint, 1.0 - f))
+            } else {
+                Some((reflect(dir, ns), *reflect_tint, f))
+            }
+        }
+        _ => None,
+    }
 }
 
 /// Where a path that meets `material` at `hit` along `dir` (shading normal `ns`, facing the

@@ -13,12 +13,12 @@
 //! each forced along its chain, and half across the pixel as before, and every sample is
 //! weighed by the balance heuristic over both groups (multi-sample importance sampling): the
 //! estimate's expectation is the pixel's whatever a target misses, since the spread half
-//! covers the whole pixel and every chain. Owns the image search and the samples' placement and weights; must not flag
-//! pixels ([`super::pilots`]), trace the emission ([`super::emission`]) or shade.
+//! covers the whole pixel and every chain. Owns the image search and the samples' placement
+//! and weights; must not flag pixels ([`super::pilots`]), trace the emission
+//! ([`super::emission`]) or shade.
 
 use super::camera::RayCamera;
-use crate::optics::{reflect, refract};
-use crate::scene::Material;
+use super::integrator::chosen_specular;
 use crate::world::{BoundingSphere, Surface, World};
 use glam::{Mat2, Vec2, Vec3};
 
@@ -243,29 +243,26 @@ pub fn find(world: &World, camera: &RayCamera, pixel: Vec2, seeds: &[Seed]) -> V
     images
 }
 
+/// The choices of chain `code` (as [`Seed::code`]), first bounce first: refract or not.
+pub fn chain_choices(code: u64) -> impl ExactSizeIterator<Item = bool> {
+    (0..63 - code.max(1).leading_zeros())
+        .rev()
+        .map(move |i| (code >> i) & 1 == 1)
+}
+
 /// The last ray (origin, unit direction) of the chain of choices `code` through film point
 /// `film`, or `None` where the chain cannot be followed there (it meets a light, a diffuse
 /// surface or nothing early, or totally reflects where it should refract).
 pub fn chain_end(world: &World, camera: &RayCamera, film: Vec2, code: u64) -> Option<(Vec3, Vec3)> {
     let ray = camera.chief_ray(film.x, film.y);
     let (mut origin, mut dir) = (ray.origin, ray.direction);
-    let bounces = 63 - code.max(1).leading_zeros();
-    for i in (0..bounces).rev() {
-        let refracts = (code >> i) & 1 == 1;
+    for refracts in chain_choices(code) {
         let hit = world.intersect(origin, dir, 0.0, f32::INFINITY)?;
         let Surface::Material(m) = hit.surface else {
             return None;
         };
         let (ng, ns) = hit.facing(dir);
-        let next = match world.material_at(m, &hit) {
-            Material::Mirror { .. } if !refracts => reflect(dir, ns),
-            Material::Glass { ior, .. } if refracts => {
-                let eta = if hit.entering(dir) { 1.0 / ior } else { ior };
-                refract(dir, ns, eta)?
-            }
-            Material::Glass { .. } => reflect(dir, ns),
-            _ => return None,
-        };
+        let (next, _, _) = chosen_specular(&world.material_at(m, &hit), &hit, dir, ns, refracts)?;
         let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
         origin = hit.position + side * world.ray_epsilon();
         dir = next;
