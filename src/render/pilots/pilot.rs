@@ -130,18 +130,22 @@ pub(super) fn sees_emission(pilots: &[&Pilot; 5]) -> bool {
     }
     // The pixel's widest angle bounds every branch's spread: most pixels stop here.
     let whole = widest(rays());
-    for ray in rays().filter(|r| r.light_gap <= SPREAD_MARGIN * whole) {
-        let matched = (pilots.iter()).all(|p| p.last_rays.iter().any(|r| r.code == ray.code));
-        let spread = if matched {
-            widest(rays().filter(|r| r.code == ray.code))
-        } else {
-            whole
-        };
-        if ray.light_gap <= SPREAD_MARGIN * spread {
-            return true;
-        }
-    }
-    false
+    rays().any(|ray| ray.light_gap <= SPREAD_MARGIN * whole && near_light(pilots, ray, whole))
+}
+
+/// Whether a light lies within `ray`'s branch's spread across the pixel (`pilots`), with the
+/// margin: the widest angle between that branch's last rays, or `whole`, the pixel's widest
+/// between any two, where some pilot lacks the branch (a silhouette or a total reflection's
+/// edge inside the pixel).
+pub(super) fn near_light(pilots: &[&Pilot; 5], ray: &LastRay, whole: f32) -> bool {
+    let matched = (pilots.iter()).all(|p| p.last_rays.iter().any(|r| r.code == ray.code));
+    let spread = if matched {
+        let rays = pilots.iter().flat_map(|p| p.last_rays.iter());
+        widest(rays.filter(|r| r.code == ray.code))
+    } else {
+        whole
+    };
+    ray.light_gap <= SPREAD_MARGIN * spread
 }
 
 /// The widest angle between two of the rays' directions (one inverse cosine, of the smallest

@@ -3,7 +3,7 @@
 //! visible bounds and shadow probes they are measured against; and where a flagged pixel's
 //! search for light images starts. Owns the tracing of pilots; must not decide a pixel's plan.
 
-use super::pilot::{BranchCode, LastRay, Pilot, SPREAD_MARGIN, gap_to_sphere, widest};
+use super::pilot::{BranchCode, LastRay, Pilot, SPREAD_MARGIN, gap_to_sphere, near_light, widest};
 use crate::optics::{fresnel_dielectric, reflect, refract};
 use crate::render::light_images::{self, Seed};
 use crate::scene::Material;
@@ -156,8 +156,8 @@ impl<'w> Survey<'w> {
     /// with its offset in the pixel whose film corner is `corner`), one per chain and light,
     /// nearest the light first.
     pub(super) fn seeds(&self, pilots: &[(&Pilot, Vec2); 5], corner: Vec2) -> Vec<Seed> {
-        let rays = || pilots.iter().flat_map(|(p, _)| p.last_rays.iter());
-        let whole = widest(rays());
+        let alone = pilots.map(|(p, _)| p);
+        let whole = widest(alone.iter().flat_map(|p| p.last_rays.iter()));
         let mut near: Vec<(&LastRay, Vec2)> = (pilots.iter())
             .flat_map(|(p, offset)| p.last_rays.iter().map(move |r| (r, *offset)))
             .filter(|(r, _)| r.light != u32::MAX && r.light_gap <= SPREAD_MARGIN * whole)
@@ -176,11 +176,7 @@ impl<'w> Survey<'w> {
             }
             // As for the flag: a light further from a ray than its branch's spread across
             // the pixel allows is seen elsewhere, and Newton's method would leave the pixel.
-            let matched =
-                (pilots.iter()).all(|(p, _)| p.last_rays.iter().any(|r| r.code == ray.code));
-            if matched
-                && ray.light_gap > SPREAD_MARGIN * widest(rays().filter(|r| r.code == ray.code))
-            {
+            if !near_light(&alone, ray, whole) {
                 continue;
             }
             let seed = Seed {
