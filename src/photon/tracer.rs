@@ -537,13 +537,12 @@ pub(super) fn trace_path(
     stored: &mut Vec<TracedPhoton>,
     log: &mut impl RayLog,
 ) -> u64 {
-    let eps = world.ray_epsilon();
     let mut rays = 0;
     loop {
         rays += 1;
         log.cast(path.origin, path.direction);
         let hit = world.closest_hit(path.origin, path.direction, 0.0, f32::INFINITY);
-        if !advance(world, kind, eps, &mut path, hit, stored) {
+        if !advance(world, kind, &mut path, hit, stored) {
             return rays;
         }
     }
@@ -555,7 +554,6 @@ pub(super) fn trace_path(
 fn advance(
     world: &World,
     kind: MapKind,
-    eps: f32,
     path: &mut LivePath,
     closest: Option<ClosestHit>,
     stored: &mut Vec<TracedPhoton>,
@@ -639,9 +637,19 @@ fn advance(
     path.bounces += 1;
     // Leave the surface on the side the new direction points to.
     let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
-    path.origin = hit.position + side * eps;
+    path.origin = hit.position + side * world.ray_epsilon_at(hit.position);
     path.direction = next;
-    path.bounces < MAX_BOUNCES
+    path.bounces < bounce_limit(world)
+}
+
+/// Surfaces a path may meet: the tracer's own limit, or fewer where the scene caps paths
+/// (a photon stored on its k-th surface has met k − 1 before it).
+#[inline(always)]
+fn bounce_limit(world: &World) -> u32 {
+    match world.description.transport.photon_bounces() {
+        Some(cap) => MAX_BOUNCES.min(cap + 1),
+        None => MAX_BOUNCES,
+    }
 }
 
 /// A Lambert bounce off `position` (unit normal `ns` on the side the photon came from): the

@@ -197,9 +197,19 @@ pub struct RenderArgs {
     pub spp: u32,
 
     /// Mirror and glass bounces followed from the eye.
+    ///
+    /// A pbrt scene's `Integrator` `maxdepth` lowers it further.
     #[arg(long, value_name = "N", default_value_t = 10, allow_negative_numbers = true,
           help_heading = headings::EYE, hide_short_help = true)]
     pub max_depth: u32,
+
+    /// Follow light as dpm does, whatever a pbrt scene's `Integrator` line says.
+    ///
+    /// By default dpm models the line: paths end at its `maxdepth` (5 where it gives none)
+    /// as pbrt counts bounces, and `directlighting` builds no photon maps. Without an
+    /// `Integrator` line, and in TOML scenes, every path goes on until its flux runs out.
+    #[arg(long, help_heading = headings::EYE)]
+    pub full_transport: bool,
 
     /// Shadow rays per area light and per environment at each diffuse eye hit.
     ///

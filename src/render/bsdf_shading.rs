@@ -86,7 +86,8 @@ impl Integrator<'_> {
             direct: self.direct_bsdf(&at, &bsdf, sampled, followed_lit, diffuse_hit, sampler),
             ..Radiance::default()
         };
-        if bsdf.has(Part::Estimated) {
+        let transport = self.world.description.transport;
+        if bsdf.has(Part::Estimated) && transport.reads_photons(depth) {
             let query = Query {
                 position: hit.position,
                 normal: ns,
@@ -204,6 +205,10 @@ impl Integrator<'_> {
                 direct: weight * emitted * mis(light_pdf, light),
                 ..Radiance::default()
             };
+        }
+        if !self.world.description.transport.glossy_sees_surfaces() {
+            // pbrt's direct lighting: a glossy lobe sees lights, not what they light.
+            return Radiance::default();
         }
         weight * self.shade(&found, next, depth + 1, after, sampler, scratch)
     }

@@ -188,6 +188,11 @@ impl Integrator<'_> {
             }
             Surface::Material(m) => m,
         };
+        let transport = self.world.description.transport;
+        if !transport.shades(depth) {
+            // Past the scene's cap only emitters seen count.
+            return Radiance::default();
+        }
         let (ng, ns) = hit.facing(dir);
         match &self.world.material_at(m, hit) {
             Material::Bsdf(model) => {
@@ -202,8 +207,15 @@ impl Integrator<'_> {
                 let brdf = *albedo * FRAC_1_PI;
                 let at = sampler.next_diffuse_hit();
                 let reception = Reception::Lambert(*albedo);
+                let direct = brdf * self.direct(p, ns, at, sampler);
+                if !transport.reads_photons(depth) {
+                    return Radiance {
+                        direct,
+                        ..Radiance::default()
+                    };
+                }
                 Radiance {
-                    direct: brdf * self.direct(p, ns, at, sampler),
+                    direct,
                     caustic: self.caustic(&reception, &query, scratch),
                     indirect: self.indirect(&reception, p, ns, at, &query, sampler, scratch),
                 }
@@ -397,7 +409,7 @@ impl Integrator<'_> {
     }
 
     pub(super) fn offset(&self, p: Vec3, n: Vec3) -> Vec3 {
-        p + n * self.world.ray_epsilon()
+        p + n * self.world.ray_epsilon_at(p)
     }
 
     /// Origin for a ray leaving `p` in direction `d`, on the side `d` points to.

@@ -40,6 +40,7 @@ use crate::estimate::{
 use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, TraceCounts, trace_map_within};
 use crate::sampling::PathSampler;
+use crate::scene::Transport;
 use crate::timing::{PhaseTimes, progress};
 use crate::world::World;
 use indicatif::ProgressBar;
@@ -102,6 +103,10 @@ pub struct RenderSettings {
     #[serde(default = "no_growth", skip_serializing_if = "PhotonGrowth::is_none")]
     pub caustic_growth: PhotonGrowth,
     pub estimator: EstimatorSettings,
+    /// How far light is followed (a pbrt scene's `Integrator` line). Left out of the file
+    /// when dpm's own, so films that had no cap keep their bytes.
+    #[serde(default, skip_serializing_if = "Transport::is_full")]
+    pub transport: Transport,
 }
 
 fn no_growth() -> PhotonGrowth {

@@ -37,6 +37,9 @@ pub fn load_world(args: &RenderArgs, times: &mut PhaseTimes) -> Result<(World, u
         };
         scene::load_with_options(&args.scene, &options)
     })?;
+    if args.full_transport {
+        description.transport = scene::Transport::Full;
+    }
     if let Some((width, height)) = args.resolution {
         description.camera.width = width;
         description.camera.height = height;
@@ -253,7 +256,8 @@ fn drop_an_empty_lone_global_map(
 fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
     let diffuse_objects = world.diffuse_objects();
     let lone = world.lights_itself_alone();
-    RenderSettings {
+    let transport = world.description.transport;
+    let mut settings = RenderSettings {
         caustic_photons: args.caustic_photons,
         // Diffuse light bounces between two diffuse objects, or from one back to itself
         // through its mirrors and glass; a lone plane cannot light itself.
@@ -268,7 +272,9 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
             _ => 0,
         }),
         spp: args.spp,
-        max_depth: args.max_depth,
+        max_depth: transport
+            .max_depth()
+            .map_or(args.max_depth, |cap| args.max_depth.min(cap)),
         final_gather: args.final_gather,
         global_k: args.global_k,
         irradiance_stride: args.irradiance_stride,
@@ -290,7 +296,16 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
             args.caustic_photons as u64,
         ),
         estimator: args.estimate.settings_with_radius_k(DEFAULT_RADIUS_K),
+        transport,
+    };
+    if let scene::Transport::Direct { .. } = transport {
+        // pbrt's direct lighting: nothing reaches a diffuse or glossy surface past a bounce.
+        settings.caustic_photons = 0;
+        settings.global_photons = 0;
+        settings.global_paths = 0;
+        settings.guide_paths = 0;
     }
+    settings
 }
 
 /// The pilot rays' plan of every pixel (once per render); None when interrupted.

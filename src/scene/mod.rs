@@ -29,14 +29,16 @@ mod toml_bsdf;
 mod toml_mix;
 mod toml_texture;
 pub(crate) mod transform;
+mod transport;
 mod validate;
 
 pub use curves::{CurveKind, Curves, check_curves};
 pub use environment::{EnvironmentMap, SphereMapping};
 pub use rules::{InvalidField, check_light, check_material, check_materials, check_mesh};
 pub use texture::{Cutout, Texture, TexturedMaterial, TexturedParameter};
+pub use transport::{PBRT_DEFAULT_MAX_DEPTH, Transport};
 
-use glam::{Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -57,6 +59,8 @@ pub struct SceneDescription {
     /// What the written image's pixels are multiplied by (pbrt's film settings; the TOML
     /// format leaves every image as rendered).
     pub response: ImageResponse,
+    /// How far light is followed: a pbrt `Integrator` line's cap, or dpm's own.
+    pub transport: Transport,
 }
 
 /// A linear map from the rendered radiance to the written pixel values: a white balance (a
@@ -416,6 +420,10 @@ pub enum Shape {
         center: Vec3,
         radius: f32,
         material: u32,
+        /// From the world's axes to the sphere's own (orthonormal, a mirror allowed): where
+        /// its (u, v) are measured. pbrt's spheres turn with their transform; TOML spheres
+        /// keep the world's axes (the identity).
+        to_object: Mat3,
     },
     Triangles(TriangleMesh),
     Curves(Curves),
@@ -666,6 +674,7 @@ pub fn parse_with(
         instances: Vec::new(),
         textured_materials,
         response: ImageResponse::default(),
+        transport: Transport::Full,
     };
     report
         .warnings

@@ -88,6 +88,8 @@ pub(super) struct Parsed {
     pub files: Vec<PathBuf>,
     pub camera: Option<CameraItem>,
     pub film: Option<Item>,
+    /// The `Integrator` line: how far pbrt follows light.
+    pub integrator: Option<Item>,
     pub lights: Vec<LightItem>,
     pub shapes: Vec<ShapeItem>,
     /// `Material` and `MakeNamedMaterial` definitions; a named one carries its name.
@@ -97,7 +99,7 @@ pub(super) struct Parsed {
     pub instances: Vec<InstanceItem>,
     /// In the order they are defined.
     pub textures: Vec<TextureItem>,
-    /// Directives read and deliberately not used (Sampler, Integrator, ...), for the report.
+    /// Directives read and deliberately not used (Sampler, PixelFilter, ...), for the report.
     pub ignored: Vec<String>,
     pub warnings: Vec<String>,
     pub dialect: DialectEvidence,
@@ -258,7 +260,11 @@ impl Parser<'_> {
                 }
                 self.out.film = Some(item);
             }
-            "Sampler" | "Integrator" | "PixelFilter" | "Accelerator" | "SurfaceIntegrator"
+            "Integrator" => {
+                self.before_world(&place, directive)?;
+                self.out.integrator = Some(self.item(args, None)?);
+            }
+            "Sampler" | "PixelFilter" | "Accelerator" | "SurfaceIntegrator"
             | "VolumeIntegrator" | "Renderer" => {
                 self.before_world(&place, directive)?;
                 let item = self.item(args, None)?;

@@ -1,5 +1,5 @@
 //! What the parsed pbrt directives become in dpm: the film ([`film`]: resolution, crop window
-//! and what pbrt does to the written image), the camera ([`camera`]), the lights (pbrt gives intensity or radiance,
+//! and what pbrt does to the written image), how far light is followed ([`integrator`]), the camera ([`camera`]), the lights (pbrt gives intensity or radiance,
 //! dpm's lights carry total flux), the materials ([`materials`]) and the shapes ([`shapes`], the tessellated ones in
 //! [`tessellated`], curves in [`curves`]).
 //! Warnings (one per approximated material, ignored parameters) go to the [`LoadReport`].
@@ -11,6 +11,7 @@ mod curves;
 mod environment;
 mod film;
 mod glossy;
+mod integrator;
 mod lights;
 mod materials;
 mod mix;
@@ -91,6 +92,7 @@ pub(super) fn scene(
     );
     m.define_textures(&parsed.textures)?;
     let film = m.film(parsed.film.as_ref(), parsed.camera.as_ref())?;
+    let transport = m.transport(parsed.integrator.as_ref())?;
     let camera = m.camera(parsed.camera.as_ref(), film.resolution, film.crop)?;
     let mut lights = Vec::new();
     for light in &parsed.lights {
@@ -181,6 +183,7 @@ pub(super) fn scene(
         instances,
         response: film.response,
         textured_materials: m.textured_materials,
+        transport,
     };
     let mut report = m.report;
     report
