@@ -216,7 +216,7 @@ fn texture_coordinates_read_back_from_pbrt_ply_and_obj() {
 #[test]
 fn hits_resolve_their_uv_on_meshes_without_uv_and_on_spheres() {
     // A mesh without uv takes pbrt's corners (0, 0), (1, 0), (1, 1); the sphere sits at
-    // (0, 5, 0), its (u, v) measured about its centre in the world frame.
+    // (0, 5, 0), unturned, so its (u, v) are measured along the world's axes.
     let text = pbrt_world(
         "Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" 2 \"float vscale\" 2\n\
          Material \"matte\" \"texture Kd\" \"c\"\n\
@@ -262,6 +262,50 @@ fn hits_resolve_their_uv_on_meshes_without_uv_and_on_spheres() {
             assert!((uv.x - want.x).abs() < 1e-3, "{from}: {uv}");
         }
         assert!((uv.y - want.y).abs() < 1e-3, "{from}: {uv}");
+    }
+}
+
+#[test]
+fn a_turned_sphere_measures_its_uv_along_its_own_axes() {
+    // pbrt's Sphere takes (u, v) at the hit in object space: u = φ/2π with φ = atan2(y, x)
+    // in [0, 2π), v = (θ − θ_min)/(θ_max − θ_min) = 1 − θ/π for a full sphere. The object
+    // frame here is turned 130° about x, then 30° about z, and scaled by 2, mirrored in x.
+    let text = pbrt_world(
+        "Texture \"c\" \"spectrum\" \"checkerboard\"\n\
+         Material \"matte\" \"texture Kd\" \"c\"\n\
+         AttributeBegin\nTranslate 0 5 0\nRotate 130 1 0 0\nRotate 30 0 0 1\nScale -2 2 2\n\
+         Shape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n",
+    );
+    let (s, _) = loads(&text);
+    let world = World::new(s).unwrap();
+    let centre = Vec3::new(0.0, 5.0, 0.0);
+    let object_to_world = glam::Mat3::from_axis_angle(Vec3::X, 130f32.to_radians())
+        * glam::Mat3::from_axis_angle(Vec3::Z, 30f32.to_radians())
+        * glam::Mat3::from_diagonal(Vec3::new(-2.0, 2.0, 2.0));
+    let world_to_object = object_to_world.inverse();
+    let mut rng = dpm::sampling::Rng::for_index(7, dpm::sampling::Stream::Distribution, 0);
+    for _ in 0..200 {
+        let from = Vec3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        )
+        .normalize();
+        let hit = world
+            .intersect(centre + 3.0 * from, -from, 0.0, f32::INFINITY)
+            .unwrap();
+        let p = world_to_object * (hit.position - centre);
+        let phi = (p.y.atan2(p.x) + std::f32::consts::TAU) % std::f32::consts::TAU;
+        let theta = (p.z / p.length()).clamp(-1.0, 1.0).acos();
+        let want = Vec2::new(
+            phi / std::f32::consts::TAU,
+            1.0 - theta / std::f32::consts::PI,
+        );
+        let uv = world.uv_at(&hit);
+        // u wraps at φ = 0.
+        let du = (uv.x - want.x).abs();
+        assert!(du.min(1.0 - du) < 2e-3, "{from}: {uv} against {want}");
+        assert!((uv.y - want.y).abs() < 2e-3, "{from}: {uv} against {want}");
     }
 }
 

@@ -22,13 +22,20 @@ pub struct LobeSample {
     pub delta: bool,
 }
 
+/// Which side of a dielectric light meets depends, for pbrt-v3's coats, on the side of the
+/// surface's own normal it arrives from: pbrt-v3 evaluates their `FresnelDielectric` at the
+/// cosine to the normal turned to the upper side, so from below the normal the indices swap.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Fresnel {
-    /// A dielectric of this index (inside over outside), seen from outside.
+    /// A dielectric of this index (inside over outside), seen from outside from either side
+    /// (pbrt-v4's interfaces, which turn to the side light arrives from).
     Dielectric(f32),
-    /// A dielectric of this index seen from inside, totally reflecting past its critical
-    /// angle: pbrt-v3's `plastic` coat, whose indices are swapped (pbrt-v3 issue #210, kept
-    /// there so that old images stay the same; dpm matches pbrt-v3's images).
+    /// pbrt-v3's `FresnelDielectric(1, η)` (`uber`): seen from outside on the normal's side,
+    /// from inside (totally reflecting past the critical angle) from the other.
+    SidedDielectric(f32),
+    /// pbrt-v3's `FresnelDielectric(η, 1)` (`plastic`, whose indices are swapped: pbrt-v3
+    /// issue #210, kept there so that old images stay the same; dpm matches pbrt-v3's
+    /// images): seen from inside on the normal's side, from outside from the other.
     DielectricFromInside(f32),
     Conductor {
         eta: Vec3,
@@ -37,10 +44,12 @@ pub enum Fresnel {
 }
 
 impl Fresnel {
+    /// The reflectance at `cos`, the cosine to the surface's own normal (negative below it).
     fn at(&self, cos: f32) -> Vec3 {
         match *self {
             Fresnel::Dielectric(eta) => Vec3::splat(fresnel::dielectric(cos.abs(), eta)),
-            Fresnel::DielectricFromInside(eta) => Vec3::splat(fresnel::dielectric(-cos.abs(), eta)),
+            Fresnel::SidedDielectric(eta) => Vec3::splat(fresnel::dielectric(cos, eta)),
+            Fresnel::DielectricFromInside(eta) => Vec3::splat(fresnel::dielectric(-cos, eta)),
             Fresnel::Conductor { eta, k } => fresnel::conductor(cos.abs(), eta, k),
         }
     }
@@ -163,7 +172,7 @@ impl Lobe {
         match *self {
             Lobe::Lambert(r) => r.max_element(),
             Lobe::LambertTransmission(t) => t.max_element(),
-            Lobe::Reflection { scale, fresnel, .. } => (scale * fresnel.at(c)).max_element(),
+            Lobe::Reflection { scale, fresnel, .. } => (scale * fresnel.at(wo.z)).max_element(),
             Lobe::CoatedConductor(coated) => coated.weight(Vec3::new(wo.x, wo.y, c)),
             Lobe::Dielectric {
                 eta,
@@ -207,6 +216,7 @@ impl Lobe {
                 fresnel,
                 distribution,
             } => {
+                let side = if wo.z < 0.0 { -1.0 } else { 1.0 };
                 let (wo, wi) = upper(wo, wi);
                 if distribution.is_smooth() || wi.z <= 0.0 || wo.z <= 0.0 {
                     return Vec3::ZERO;
@@ -216,7 +226,7 @@ impl Lobe {
                     return Vec3::ZERO;
                 }
                 let value = distribution.d(m) * distribution.g(wo, wi) / (4.0 * wo.z * wi.z);
-                scale * fresnel.at(wo.dot(m)) * value
+                scale * fresnel.at(side * wo.dot(m)) * value
             }
             Lobe::CoatedConductor(coated) => {
                 let (wo, wi) = upper(wo, wi);

@@ -124,12 +124,12 @@ impl Bsdf {
                 b.push(Lobe::Lambert(opacity * kd));
                 b.push(Lobe::Reflection {
                     scale: opacity * ks,
-                    fresnel: Fresnel::Dielectric(eta),
+                    fresnel: Fresnel::SidedDielectric(eta),
                     distribution: tr(alpha),
                 });
                 b.push(Lobe::Reflection {
                     scale: opacity * kr,
-                    fresnel: Fresnel::Dielectric(eta),
+                    fresnel: Fresnel::SidedDielectric(eta),
                     distribution: tr(Vec2::ZERO),
                 });
                 b.push(Lobe::SpecularTransmission {
@@ -233,7 +233,7 @@ impl Bsdf {
             Lobe::Lambert(c) | Lobe::LambertTransmission(c) => c.max_element() <= 0.0,
             // Index 1 reflects nothing (pbrt's uber with `index` 1).
             Lobe::Reflection {
-                fresnel: Fresnel::Dielectric(1.0),
+                fresnel: Fresnel::Dielectric(1.0) | Fresnel::SidedDielectric(1.0),
                 ..
             } => true,
             Lobe::Reflection { scale, .. } | Lobe::SpecularTransmission { scale, .. } => {

@@ -83,7 +83,7 @@ pub fn landing_worth(
 /// Irradiance at `p` (unit normal `n`) straight from the lights: one shadow-tested sample per
 /// light, mean over the channels.
 fn direct_irradiance(world: &World, p: Vec3, n: Vec3, rng: &mut Rng) -> f32 {
-    let origin = p + n * world.ray_epsilon();
+    let origin = p + n * world.ray_epsilon_at(p);
     let mut e = Vec3::ZERO;
     for light in &world.light_sources {
         let Some(s) = light.sample_incident(p, n, rng.next_2d()) else {

@@ -379,6 +379,7 @@ pub(crate) fn sphere(
         center: rules::finite3("center", Vec3::from_array(spec.center)).map_err(&at)?,
         radius: rules::positive("radius", spec.radius).map_err(&at)?,
         material: materials.resolve(doc, &child_path(path, "material"), &spec.material)?,
+        to_object: glam::Mat3::IDENTITY,
     })
 }
 
@@ -495,6 +496,7 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
                 center,
                 radius,
                 material,
+                ..
             } if opaque(*material) => {
                 let (c, r) = (*center, *radius);
                 Box::new(move |p: Vec3| p.distance_squared(c) < r * r)

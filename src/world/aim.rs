@@ -416,6 +416,7 @@ mod tests {
             center: Vec3::new(5.0, 0.0, 0.0),
             radius: 0.5,
             material: 0,
+            to_object: glam::Mat3::IDENTITY,
         };
         for (shapes, expected) in [
             (vec![&mesh], MAX_TARGETS),

@@ -78,6 +78,7 @@ fn add_shape(
             center,
             radius,
             material,
+            ..
         } => {
             builder.add_spheres(&[(*center, *radius)])?;
             let r = Vec3::splat(*radius);
@@ -159,6 +160,10 @@ impl ClosestHit {
         (instance << 32) | u64::from(self.hit.geometry)
     }
 }
+
+/// The largest ray offset off a surface at a point, relative to the point's distance from
+/// the origin: some 8,000 times f32's rounding there, and far below any gap a scene models.
+pub const LOCAL_EPSILON: f32 = 1e-3;
 
 pub struct World {
     pub description: SceneDescription,
@@ -427,6 +432,15 @@ impl World {
     /// does not change with the scene's units.
     pub fn ray_epsilon(&self) -> f32 {
         self.scale * 2e-5
+    }
+
+    /// Offset for spawning rays off a surface at `p`: [`World::ray_epsilon`], but no more
+    /// than [`LOCAL_EPSILON`] of `p`'s distance from the origin (at least one unit), so a
+    /// huge ground plane does not lift every ray off it into the objects standing on it.
+    #[inline]
+    pub fn ray_epsilon_at(&self, p: Vec3) -> f32 {
+        self.ray_epsilon()
+            .min(LOCAL_EPSILON * p.abs().max_element().max(1.0))
     }
 
     /// Material `id` as the scene gives it: its untextured values (a textured parameter's

@@ -9,7 +9,7 @@
 use crate::scene::{
     CurveKind, MAX_MIX_DEPTH, Material, SceneDescription, Shape, TexturedMaterial, TriangleMesh,
 };
-use glam::{Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
 /// A triangle's corners' (u, v) when its mesh has none (pbrt's default).
@@ -21,9 +21,8 @@ enum GeometryUv {
     Untextured,
     /// Each triangle's corners' (u, v).
     Triangles(Vec<[Vec2; 3]>),
-    /// A sphere's parametric (u, v) about its centre, in the world frame (dpm's spheres keep
-    /// no object frame: pbrt's would turn with the sphere's transform).
-    Sphere { center: Vec3 },
+    /// A sphere's parametric (u, v) about its centre, measured along its own axes.
+    Sphere { center: Vec3, to_object: Mat3 },
     /// A flat curve or a ribbon: u is Embree's parameter along the segment (pbrt's u, 0 to 1
     /// on each segment of a pbrt curve), v across it is Embree's mapped to pbrt's 0 to 1 (from
     /// −1 to 1 on a flat curve, already 0 to 1 on a ribbon).
@@ -66,8 +65,14 @@ impl Texturing {
             (shapes.iter())
                 .map(|shape| match shape {
                     Shape::Sphere {
-                        center, material, ..
-                    } if needs_uv[*material as usize] => GeometryUv::Sphere { center: *center },
+                        center,
+                        material,
+                        to_object,
+                        ..
+                    } if needs_uv[*material as usize] => GeometryUv::Sphere {
+                        center: *center,
+                        to_object: *to_object,
+                    },
                     Shape::Triangles(mesh) if needs_uv[mesh.material as usize] => {
                         GeometryUv::Triangles(corner_uvs(mesh))
                     }
@@ -212,7 +217,9 @@ fn geometry_uv(uv: Option<&GeometryUv>, primitive: u32, barycentric: Vec2, posit
             let [t0, t1, t2] = corners[primitive as usize];
             (1.0 - barycentric.x - barycentric.y) * t0 + barycentric.x * t1 + barycentric.y * t2
         }
-        Some(GeometryUv::Sphere { center }) => sphere_uv(position - *center),
+        Some(GeometryUv::Sphere { center, to_object }) => {
+            sphere_uv(*to_object * (position - *center))
+        }
         Some(GeometryUv::Band(kind)) => {
             let v = match kind {
                 CurveKind::Flat => 0.5 * (barycentric.y + 1.0),

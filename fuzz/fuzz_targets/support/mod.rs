@@ -75,7 +75,9 @@ fn check_shape(shape: &Shape, materials: usize) {
             center,
             radius,
             material,
+            to_object,
         } => {
+            assert!(to_object.is_finite());
             assert!(center.is_finite() && radius.is_finite() && *radius > 0.0);
             assert!((*material as usize) < materials);
         }

@@ -269,11 +269,17 @@ fn shapes(h: &mut Fnv64, shapes: &[Shape]) {
                 center,
                 radius,
                 material,
+                to_object,
             } => {
                 h.u32(0);
                 h.vec3(*center);
                 h.f32(*radius);
                 h.u32(*material);
+                // Only a turned sphere hashes its frame, so unturned ones keep their
+                // fingerprints (and their photon files).
+                if *to_object != glam::Mat3::IDENTITY {
+                    to_object.to_cols_array().iter().for_each(|x| h.f32(*x));
+                }
             }
             Shape::Triangles(mesh) => {
                 h.u32(1);

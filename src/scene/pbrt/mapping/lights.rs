@@ -173,7 +173,7 @@ impl Mapper<'_> {
             None => radiance * (PI * area_m2 * sides),
         };
         let light = match self.geometry(shape)? {
-            Geometry::Sphere { center, radius } => {
+            Geometry::Sphere { center, radius, .. } => {
                 if shape.reverse_orientation {
                     return Err(shape.item.at.error(
                         "Shape",

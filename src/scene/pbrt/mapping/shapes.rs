@@ -30,7 +30,12 @@ pub(super) struct MeshData {
 
 /// A shape's geometry in world space, before it is given a material or made a light.
 pub(in super::super) enum Geometry {
-    Sphere { center: Vec3, radius: f32 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        /// From the world's axes to the sphere's own, its transform's rotation undone.
+        to_object: Mat3,
+    },
     Triangles(TriangleMesh),
     Curves(Curves),
 }
@@ -42,10 +47,15 @@ impl Mapper<'_> {
         material: u32,
     ) -> Result<Vec<Shape>, SceneError> {
         Ok(match self.geometry(shape)? {
-            Geometry::Sphere { center, radius } => vec![Shape::Sphere {
+            Geometry::Sphere {
+                center,
+                radius,
+                to_object,
+            } => vec![Shape::Sphere {
                 center,
                 radius,
                 material,
+                to_object,
             }],
             Geometry::Triangles(mut mesh) => {
                 mesh.material = material;
@@ -228,7 +238,13 @@ impl Mapper<'_> {
                 .at
                 .error("Shape", "the transformed sphere is not finite"));
         }
-        Ok(Geometry::Sphere { center, radius })
+        // The transform is `mean` times an orthonormal matrix, whose transpose undoes it.
+        let to_object = (m * (1.0 / mean)).transpose();
+        Ok(Geometry::Sphere {
+            center,
+            radius,
+            to_object,
+        })
     }
 
     /// Places a mesh in the world, wound as pbrt orients it, without zero-area triangles.
