@@ -273,7 +273,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         }),
         spp: args.spp,
         max_depth: transport
-            .max_depth()
+            .eye_bounces()
             .map_or(args.max_depth, |cap| args.max_depth.min(cap)),
         final_gather: args.final_gather,
         global_k: args.global_k,

@@ -66,6 +66,19 @@ impl Transport {
         }
     }
 
+    /// The most mirror and glass bounces an eye path may follow (`None`: no cap). pbrt's path
+    /// tracers see an emitter past `maxdepth` of them; its SPPM camera path and its direct
+    /// lighting stop a bounce earlier (their last surface is at depth `maxdepth − 1`).
+    pub fn eye_bounces(self) -> Option<u32> {
+        match self {
+            Transport::Full => None,
+            Transport::Paths { max_depth } => Some(max_depth),
+            Transport::CameraAndPhotonPaths { max_depth } | Transport::Direct { max_depth } => {
+                Some(max_depth.saturating_sub(1))
+            }
+        }
+    }
+
     /// The most surfaces a photon may have met before the one it is stored on (`None`: no
     /// cap). Exact for pbrt's `sppm`, and for a path integrator's surfaces the camera sees
     /// directly.
@@ -115,6 +128,9 @@ mod tests {
         let sppm = Transport::CameraAndPhotonPaths { max_depth: 5 };
         assert!(sppm.reads_photons(4) && !sppm.shades(5));
         assert_eq!(sppm.photon_bounces(), Some(4));
+        assert_eq!(sppm.eye_bounces(), Some(4));
+        assert_eq!(paths.eye_bounces(), Some(5));
+        assert_eq!(Transport::Direct { max_depth: 1 }.eye_bounces(), Some(0));
         let direct = Transport::Direct { max_depth: 5 };
         assert!(direct.shades(4) && !direct.reads_photons(0) && !direct.glossy_sees_surfaces());
         let full = Transport::Full;
