@@ -171,3 +171,31 @@ fn a_floor_beside_where_a_sphere_stands_is_lit_however_large_the_floor() {
         );
     }
 }
+
+#[test]
+fn a_shading_normal_lying_in_its_face_still_reflects_that_sides_light() {
+    // buddha-fractal's floor is the plane z = 0 with every "normal N" (0, 1, 0). pbrt reflects
+    // the light of the geometric side the eye is on, weighed by |ωi · ns|: under a uniform sky
+    // of radiance L that is ∫ over z > 0 of |ωy| dω = π, so a matte floor shows Kd·L, as it
+    // would with its true normal (pbrt-v3 13d871f renders 0.7339 for Kd·L = 0.7339).
+    let text = "LookAt 0 -5 3  0 0 0  0 0 1\nCamera \"perspective\"\nWorldBegin\n\
+                LightSource \"infinite\" \"rgb L\" [1 1 1]\n\
+                Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]\n\
+                Shape \"trianglemesh\" \"point P\" [-9 -9 0  9 -9 0  9 9 0  -9 9 0]\n\
+                \"integer indices\" [0 1 2  2 3 0] \"normal N\" [0 1 0  0 1 0  0 1 0  0 1 0]\n\
+                WorldEnd\n";
+    let (description, _) = loads(text);
+    let world = World::new(description).unwrap();
+    let integrator = dpm::render::integrator::Integrator {
+        light_samples: 4096,
+        ..whitted(&world, 1)
+    };
+    for (x, y) in [(0.0, 0.0), (1.0, -2.0)] {
+        let seen = radiance_along(
+            &integrator,
+            DVec3::new(x, y - 1.0, 1.0),
+            DVec3::new(0.0, 1.0, -1.0).normalize(),
+        );
+        assert!((seen.x / 0.5 - 1.0).abs() < 0.01, "({x}, {y}): {seen}");
+    }
+}

@@ -207,7 +207,7 @@ impl Integrator<'_> {
                 let brdf = *albedo * FRAC_1_PI;
                 let at = sampler.next_diffuse_hit();
                 let reception = Reception::Lambert(*albedo);
-                let direct = brdf * self.direct(p, ns, at, sampler);
+                let direct = brdf * self.direct(p, ng, ns, at, sampler);
                 if !transport.reads_photons(depth) {
                     return Radiance {
                         direct,
@@ -417,11 +417,13 @@ impl Integrator<'_> {
         self.offset(p, if d.dot(ng) >= 0.0 { ng } else { -ng })
     }
 
-    /// Direct irradiance at `p` with normal `n` (diffuse hit `at` of the path): the mean of
-    /// `light_samples` shadow-tested samples per area light and environment, stratified (see
+    /// Direct irradiance at `p` (diffuse hit `at` of the path): the mean of `light_samples`
+    /// shadow-tested samples per area light and environment, stratified (see
     /// [`PathSampler::light_2d`]), and one per point, spot or distant light, which have
-    /// nothing to stratify.
-    fn direct(&self, p: Vec3, n: Vec3, at: u32, sampler: &mut PathSampler) -> Vec3 {
+    /// nothing to stratify. As pbrt reflects light: from the side of the geometric normal
+    /// `ng` the path came from, weighed by the cosine to the shading normal `ns` (a shading
+    /// normal tilted far from the face, even lying in it, still sees that side's light).
+    fn direct(&self, p: Vec3, ng: Vec3, ns: Vec3, at: u32, sampler: &mut PathSampler) -> Vec3 {
         let mut e = Vec3::ZERO;
         for (l, light) in self.world.light_sources.iter().enumerate() {
             let count = if light.is_delta() {
@@ -431,13 +433,14 @@ impl Integrator<'_> {
             };
             let mut sum = Vec3::ZERO;
             for j in 0..count {
-                let Some(s) = light.sample_incident(p, n, sampler.light_2d(at, l, j, count)) else {
+                let Some(s) = light.sample_incident(p, ng, sampler.light_2d(at, l, j, count))
+                else {
                     continue;
                 };
-                let cos = n.dot(s.direction);
-                if cos <= 0.0 {
+                if ng.dot(s.direction) <= 0.0 {
                     continue;
                 }
+                let cos = ns.dot(s.direction).abs();
                 // Stop short of the light's own surface.
                 let tfar = s.distance * (1.0 - 1e-4);
                 if !self.world.occluded(p, s.direction, 0.0, tfar) {
