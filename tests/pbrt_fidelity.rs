@@ -199,3 +199,41 @@ fn a_shading_normal_lying_in_its_face_still_reflects_that_sides_light() {
         assert!((seen.x / 0.5 - 1.0).abs() < 0.01, "({x}, {y}): {seen}");
     }
 }
+
+#[test]
+fn a_point_light_behind_rough_glass_is_seen_through_it() {
+    // pbrt samples a light through a rough dielectric from the far side; no sample of the
+    // lobe can find a point light. Seen through a rough glass pane (α 0.3, the light below
+    // it), the eye receives f(ωo, ωi) · I/d² · |cos θi| from one shadow ray.
+    let text = "LookAt 0 3 0  0 0 0  0 0 1\nCamera \"perspective\"\nWorldBegin\n\
+                LightSource \"point\" \"point from\" [0.3 -1 0.1] \"rgb I\" [2 2 2]\n\
+                Material \"glass\" \"float index\" 1.5 \"float roughness\" 0.3 \
+                \"bool remaproughness\" \"false\"\n\
+                Shape \"trianglemesh\" \"point P\" [-2 0 -2  2 0 -2  2 0 2  -2 0 2]\n\
+                \"integer indices\" [0 1 2  0 2 3]\nWorldEnd\n";
+    let (description, _) = loads(text);
+    let world = World::new(description).unwrap();
+    let light = Vec3::new(0.3, -1.0, 0.1);
+    let bsdf = dpm::bsdf::Bsdf::new(&dpm::bsdf::Model::Dielectric {
+        eta: 1.5,
+        alpha: glam::Vec2::splat(0.3),
+        reflect_tint: Vec3::ONE,
+        transmit_tint: Vec3::ONE,
+    });
+    for (x, z) in [(0.0f32, 0.0f32), (0.4, -0.3), (-0.5, 0.2)] {
+        let (eye, at) = (Vec3::new(x, 1.0, z + 0.2), Vec3::new(x + 0.1, 0.0, z));
+        let dir = (at - eye).normalize();
+        let hit = world.intersect(eye, dir, 0.0, 10.0).unwrap();
+        let frame = dpm::sampling::Frame::new(hit.shading_normal);
+        let to_light = light - hit.position;
+        let (wo, wi) = (frame.to_local(-dir), frame.to_local(to_light.normalize()));
+        let want = bsdf.f(wo, wi, dpm::bsdf::Part::All).x as f64 * 2.0
+            / to_light.length_squared() as f64
+            * wi.z.abs() as f64;
+        let seen = radiance_along(&whitted(&world, 1), eye.as_dvec3(), dir.as_dvec3());
+        assert!(
+            want > 0.0 && (seen.x / want - 1.0).abs() < 1e-3,
+            "({x}, {z}): {seen} against {want}"
+        );
+    }
+}

@@ -153,6 +153,20 @@ impl Lobe {
         )
     }
 
+    /// Whether light crossing to the other side has a density here (rough or diffuse
+    /// transmission), so that a light on that side can be sampled through it.
+    pub fn transmits_spread(&self) -> bool {
+        match self {
+            Lobe::Dielectric {
+                transmit,
+                distribution,
+                ..
+            } => !distribution.is_smooth() && transmit.max_element() > 0.0,
+            Lobe::LambertTransmission(t) => t.max_element() > 0.0,
+            _ => false,
+        }
+    }
+
     pub fn is_delta(&self) -> bool {
         match self {
             Lobe::Reflection { distribution, .. }

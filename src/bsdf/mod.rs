@@ -358,6 +358,12 @@ impl Bsdf {
         sum
     }
 
+    /// Whether a lobe in `part` spreads light crossing to the other side over directions
+    /// (rough or diffuse transmission), so that lights on that side can be sampled through it.
+    pub fn transmits_spread(&self, part: Part) -> bool {
+        self.lobes(part).any(Lobe::transmits_spread)
+    }
+
     /// Whether any lobe is in `part`.
     pub fn has(&self, part: Part) -> bool {
         self.lobes(part).next().is_some()

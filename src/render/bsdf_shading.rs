@@ -36,6 +36,9 @@ struct At<'h> {
     wo: Vec3,
     /// Off the surface on the side the ray came from.
     p: Vec3,
+    /// Off the surface on the other side, where lights are sampled through a followed lobe
+    /// that spreads transmitted light (rough glass); `None` where none is.
+    back: Option<Vec3>,
     /// The geometric and shading normals facing the ray.
     ng: Vec3,
     ns: Vec3,
@@ -65,18 +68,23 @@ impl Integrator<'_> {
         // The surface's own side, not the ray's: a dielectric knows its inside by it.
         let frame = Frame::new(hit.shading_normal);
         let wo = frame.to_local(-dir);
+        // Light reaching the followed lobes from emitters is the caustic map's when the path
+        // came from a glossy lobe that reads it.
+        let followed_lit = emission != Emission::CausticMap;
+        // A point light behind rough glass reaches the eye through it only by a shadow ray
+        // from the far side (the lobe's own samples never find it), as pbrt samples it.
+        let back = (followed_lit && bsdf.transmits_spread(Part::Followed))
+            .then(|| self.offset(hit.position, -ng));
         let at = At {
             hit,
             frame,
             wo,
             p: self.offset(hit.position, ng),
+            back,
             ng,
             ns,
         };
         let diffuse_hit = sampler.next_diffuse_hit();
-        // Light reaching the followed lobes from emitters is the caustic map's when the path
-        // came from a glossy lobe that reads it.
-        let followed_lit = emission != Emission::CausticMap;
         let deeper = depth < self.max_depth;
         let sampled = Sampled {
             glossy: deeper && bsdf.has(Part::Glossy),
@@ -168,15 +176,17 @@ impl Integrator<'_> {
         if s.delta {
             return weight * self.trace(origin, next, depth + 1, along, sampler, scratch);
         }
-        // Shadow rays sample the side the ray came from only: light through a transmitting
-        // lobe is this sample's alone.
-        let mis = |light_pdf: f32, light: &crate::world::lights::LightSource| {
-            if s.transmission {
-                1.0
-            } else {
-                balance(s.pdf, self.samples_of(light) * light_pdf)
-            }
+        // Shadow rays sample the far side only through a lobe that spreads transmitted light;
+        // elsewhere light through a transmitting lobe is this sample's alone.
+        let (from, facing) = match (s.transmission, at.back) {
+            (false, _) => (Some(at.p), at.ns),
+            (true, back) => (back, -at.ns),
         };
+        let mis = |light_pdf: f32, light: &crate::world::lights::LightSource| match from {
+            Some(_) => balance(s.pdf, self.samples_of(light) * light_pdf),
+            None => 1.0,
+        };
+        let from = from.unwrap_or(at.p);
         let Some(found) = self.world.intersect(origin, next, 0.0, f32::INFINITY) else {
             let mut sky = Vec3::ZERO;
             if lit {
@@ -184,7 +194,7 @@ impl Integrator<'_> {
                     let radiance = light.radiance_at_infinity() + light.sky_radiance(next);
                     if radiance != Vec3::ZERO {
                         let light_pdf =
-                            light.incident_pdf(at.p, at.ns, next, f32::INFINITY, Vec3::ZERO);
+                            light.incident_pdf(from, facing, next, f32::INFINITY, Vec3::ZERO);
                         sky += radiance * mis(light_pdf, light);
                     }
                 }
@@ -200,7 +210,7 @@ impl Integrator<'_> {
             }
             let light = &self.world.light_sources[l];
             let emitted = light.emitted_radiance(-next.dot(found.geometric_normal));
-            let light_pdf = light.incident_pdf(at.p, at.ns, next, found.t, found.geometric_normal);
+            let light_pdf = light.incident_pdf(from, facing, next, found.t, found.geometric_normal);
             return Radiance {
                 direct: weight * emitted * mis(light_pdf, light),
                 ..Radiance::default()
@@ -242,6 +252,9 @@ impl Integrator<'_> {
             let mut sum = Vec3::ZERO;
             for j in 0..count {
                 let u = sampler.light_2d(diffuse_hit, l, j, count);
+                if let Some(back) = at.back {
+                    sum += self.through_back(at, bsdf, sampled, light, back, count, u);
+                }
                 let Some(s) = light.sample_incident(p, n, u) else {
                     continue;
                 };
@@ -275,5 +288,40 @@ impl Integrator<'_> {
             radiance += sum / count as f32;
         }
         radiance
+    }
+
+    /// One shadow-tested sample of `light` (one of `count`) from the far side `back`, through
+    /// the followed lobes that spread transmitted light, weighed against their own samples
+    /// where they are sampled.
+    #[allow(clippy::too_many_arguments)]
+    fn through_back(
+        &self,
+        at: &At,
+        bsdf: &Bsdf,
+        sampled: Sampled,
+        light: &crate::world::lights::LightSource,
+        back: Vec3,
+        count: u32,
+        u: (f32, f32),
+    ) -> Vec3 {
+        let Some(s) = light.sample_incident(back, -at.ns, u) else {
+            return Vec3::ZERO;
+        };
+        let wi = at.frame.to_local(s.direction);
+        if wi.z * at.wo.z >= 0.0 {
+            return Vec3::ZERO;
+        }
+        let mut f = bsdf.f(at.wo, wi, Part::Followed);
+        if sampled.followed && f != Vec3::ZERO {
+            f *= balance(count as f32 * s.pdf, bsdf.pdf(at.wo, wi, Part::Followed));
+        }
+        if f.max_element() <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let tfar = s.distance * (1.0 - 1e-4);
+        if self.world.occluded(back, s.direction, 0.0, tfar) {
+            return Vec3::ZERO;
+        }
+        f * s.irradiance * wi.z.abs()
     }
 }
