@@ -1,5 +1,6 @@
-//! pbrt's `curve` shape on Embree's curves: a straight cylinder curve renders the image of the
-//! pbrt `cylinder` it is, a flat curve seen face on covers its length times its width, the
+//! pbrt's `curve` shape on Embree's curves: a straight cylinder curve covers and shadows what the
+//! pbrt `cylinder` it is does, and is shaded with pbrt's normal of its cylinder curves, a flat
+//! curve seen face on covers its length times its width, the
 //! B-spline basis and degree 2 give the cubic Bézier segments they are, widths and ribbon
 //! normals follow pbrt's definitions and the transform, curves inside instanced objects
 //! render as they do written out, and malformed curves exit 2 naming their place.
@@ -57,7 +58,8 @@ fn assert_close(a: &[Vec3], b: &[Vec3]) {
 }
 
 /// A tube of radius 0.3 along x from −1.5 to 1.5 at height 0.5 over a floor, seen from the
-/// front and lit by a point light and a dim sky; `tube` is the shape (at the origin, along x).
+/// front and lit by a point light and a dim sky; `tube` is the shape (at the origin, along x),
+/// black, so that its image is what it covers and what it shadows.
 fn tube_scene(tube: &str) -> String {
     format!(
         "LookAt 0 1.2 4  0 0.5 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
@@ -66,12 +68,12 @@ fn tube_scene(tube: &str) -> String {
          LightSource \"infinite\" \"rgb L\" [0.2 0.2 0.2]\n\
          Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]\n\
          Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point3 P\" [-5 0 -5  -5 0 5  5 0 5  5 0 -5]\n\
-         AttributeBegin\nTranslate 0 0.5 0\nMaterial \"matte\" \"rgb Kd\" [0.8 0.3 0.2]\n{tube}\nAttributeEnd\nWorldEnd\n"
+         AttributeBegin\nTranslate 0 0.5 0\nMaterial \"matte\" \"rgb Kd\" [0 0 0]\n{tube}\nAttributeEnd\nWorldEnd\n"
     )
 }
 
 #[test]
-fn a_straight_cylinder_curve_renders_the_pbrt_cylinder_it_is() {
+fn a_straight_cylinder_curve_covers_and_shadows_what_the_pbrt_cylinder_it_is_does() {
     let dir = tempfile::tempdir().unwrap();
     let curve = "Shape \"curve\" \"string type\" \"cylinder\" \"float width\" 0.6 \
                  \"point3 P\" [-1.5 0 0  -0.5 0 0  0.5 0 0  1.5 0 0]";
@@ -280,10 +282,13 @@ fn hits_on_curves_face_the_ray_and_carry_pbrt_s_texture_coordinates() {
         assert!((uv.x - 0.7).abs() < 1e-3, "{uv}");
         assert!(((uv.y - 0.5).abs() - across).abs() < 1e-3, "{d}: {uv}");
     }
-    // The tube: its outward normal where a ray 0.15 off the axis meets it; pbrt's v across.
+    // The tube, met 0.15 off its axis (0.6 of its radius): pbrt's normal, the ray-facing one
+    // turned by 90° · 0.6 away from the edge the hit is near; pbrt's v across.
     let h = hit(Vec3::new(-0.6, 2.15, -5.0), Vec3::Z);
-    let outward = Vec3::new(0.0, 0.15, -(0.25f32 * 0.25 - 0.15 * 0.15).sqrt()) / 0.25;
-    assert!((h.geometric_normal - outward).length() < 1e-3, "{h:?}");
+    let (sin, cos) = (0.6 * std::f32::consts::FRAC_PI_2).sin_cos();
+    let pbrt = Vec3::new(0.0, -sin, -cos);
+    assert!((h.geometric_normal - pbrt).length() < 1e-3, "{h:?}");
+    assert_eq!(h.geometric_normal, h.shading_normal);
     let uv = world.uv_at(&h);
     assert!(
         (uv.x - 0.2).abs() < 1e-3 && ((uv.y - 0.5).abs() - 0.3).abs() < 1e-3,
@@ -425,4 +430,36 @@ fn malformed_curves_exit_2_naming_their_place() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn a_tube_lit_from_one_side_shades_as_pbrt_shades_its_cylinder_curves() {
+    // A cylinder curve of radius 0.3 along x under a distant light from +y: pbrt's normal at
+    // the offset s across the band (in radii, +y up) is the ray-facing one turned by 90° s
+    // away from the edge, (0, −sin 90°s, cos 90°s) seen from +z, so the lower half faces the
+    // light and the upper half does not; pbrt starts shadow rays two widths off the band, so
+    // nothing shadows it: L = ρ/π · E · max(0, n · ωl). pbrt-v3 13d871f renders this profile.
+    let text = world(
+        "LightSource \"distant\" \"point from\" [0 1 0.3] \"point to\" [0 0 0] \"rgb L\" [3 3 3]\n\
+         Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]\n\
+         Shape \"curve\" \"point P\" [-1 0 0  -0.3 0 0  0.3 0 0  1 0 0] \"float width\" [0.6] \
+         \"string type\" \"cylinder\"\n",
+    );
+    let (scene, _) = loads(&text.replace("LightSource \"point\"", "# "));
+    let world = dpm::world::World::new(scene).unwrap();
+    let light = Vec3::new(0.0, 1.0, 0.3).normalize();
+    for s in [-0.9f32, -0.5, -0.1, 0.3, 0.7] {
+        let seen = support::eye::radiance_along(
+            &support::eye::whitted(&world, 1),
+            glam::DVec3::new(0.1, 0.3 * s as f64, 5.0),
+            glam::DVec3::NEG_Z,
+        );
+        let (sin, cos) = (std::f32::consts::FRAC_PI_2 * s).sin_cos();
+        let n = Vec3::new(0.0, -sin, cos);
+        let want = 0.5 / std::f64::consts::PI * 3.0 * n.dot(light).max(0.0) as f64;
+        assert!(
+            (seen.x - want).abs() < 2e-3 * want.max(0.1),
+            "s = {s}: {seen} against {want}"
+        );
+    }
 }

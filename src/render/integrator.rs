@@ -199,7 +199,7 @@ impl Integrator<'_> {
                 self.shade_bsdf(hit, model, dir, depth, emission, sampler, scratch)
             }
             Material::Diffuse { albedo } => {
-                let p = self.offset(hit.position, ng);
+                let p = hit.offset_along(ng);
                 let query = Query {
                     position: hit.position,
                     normal: ns,
@@ -222,15 +222,7 @@ impl Integrator<'_> {
             }
             Material::Mirror { tint } if depth < self.max_depth => {
                 let r = reflect(dir, ns);
-                *tint
-                    * self.trace(
-                        self.spawn(hit.position, ng, r),
-                        r,
-                        depth + 1,
-                        emission,
-                        sampler,
-                        scratch,
-                    )
+                *tint * self.trace(hit.spawn(ng, r), r, depth + 1, emission, sampler, scratch)
             }
             Material::Glass {
                 ior,
@@ -251,7 +243,7 @@ impl Integrator<'_> {
                     };
                     return *tint
                         * self.trace(
-                            self.spawn(hit.position, ng, next),
+                            hit.spawn(ng, next),
                             next,
                             depth + 1,
                             emission,
@@ -260,24 +252,10 @@ impl Integrator<'_> {
                         );
                 }
                 let mut l = (f * *reflect_tint)
-                    * self.trace(
-                        self.spawn(hit.position, ng, r),
-                        r,
-                        depth + 1,
-                        emission,
-                        sampler,
-                        scratch,
-                    );
+                    * self.trace(hit.spawn(ng, r), r, depth + 1, emission, sampler, scratch);
                 if let Some(t) = refract(dir, ns, eta).filter(|_| f < 1.0) {
                     l += ((1.0 - f) * *transmit_tint)
-                        * self.trace(
-                            self.spawn(hit.position, ng, t),
-                            t,
-                            depth + 1,
-                            emission,
-                            sampler,
-                            scratch,
-                        );
+                        * self.trace(hit.spawn(ng, t), t, depth + 1, emission, sampler, scratch);
                 }
                 l
             }
@@ -312,7 +290,7 @@ impl Integrator<'_> {
                 return Vec3::ZERO;
             };
             throughput *= tint;
-            origin = self.spawn(hit.position, ng, next);
+            origin = hit.spawn(ng, next);
             dir = next;
         }
         Vec3::ZERO
@@ -402,19 +380,10 @@ impl Integrator<'_> {
                 };
             }
             throughput *= tint;
-            origin = self.spawn(hit.position, ng, next);
+            origin = hit.spawn(ng, next);
             dir = next;
         }
         chain
-    }
-
-    pub(super) fn offset(&self, p: Vec3, n: Vec3) -> Vec3 {
-        p + n * self.world.ray_epsilon_at(p)
-    }
-
-    /// Origin for a ray leaving `p` in direction `d`, on the side `d` points to.
-    pub(super) fn spawn(&self, p: Vec3, ng: Vec3, d: Vec3) -> Vec3 {
-        self.offset(p, if d.dot(ng) >= 0.0 { ng } else { -ng })
     }
 
     /// Direct irradiance at `p` (diffuse hit `at` of the path): the mean of `light_samples`

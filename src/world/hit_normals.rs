@@ -3,8 +3,9 @@
 //! then its normals). Owns the normals' layout and their evaluation at a hit; must not decide
 //! what a surface is.
 //!
-//! A curve keeps nothing: a tube's or a ribbon's normal is the one Embree reports, a flat
-//! curve's (Embree reports its tangent) is the band's that faces the ray. A curve has no
+//! A ribbon keeps nothing: its normal is the one Embree reports; a flat curve's (Embree
+//! reports its tangent) is the band's that faces the ray. A tube keeps its segments' control
+//! points and radii, for pbrt's normal and ray offset ([`HitNormals::Tube`]). A curve has no
 //! inside (a tube's is open at its ends), and like any open surface it is lit and seen on
 //! whichever side a ray meets it ([`super::Interaction::facing`]).
 
@@ -23,8 +24,15 @@ pub(super) enum HitNormals {
     /// One normal for the whole geometry (a quad light's).
     Fixed(Vec3),
     Triangles(TriangleNormals),
-    /// A tube or a ribbon: Embree's geometric normal of the hit.
+    /// A ribbon: Embree's geometric normal of the hit.
     SurfaceCurve,
+    /// A tube (pbrt's cylinder curve): each segment's four Bézier control points and radii.
+    /// pbrt draws it as a band facing the ray whose normal turns about the tangent linearly
+    /// across the band, 90° at its edges, away from the edge it is near (pbrt-v3's
+    /// `Rotate(-theta, dpduPlane)`: lit from one side, pbrt's tube is bright on the other),
+    /// and starts rays off it 2 widths along that normal, clear of the band: dpm shades and
+    /// leaves its tubes so ([`tube_offset`]), to render pbrt's image.
+    Tube(Vec<([Vec3; 4], [f32; 4])>),
     /// A flat curve, which faces every ray: its normal is the ray's direction made
     /// perpendicular to the curve's tangent (which Embree reports as the hit's normal).
     FlatCurve,
@@ -107,10 +115,46 @@ pub(super) fn normals_at(
             let n = hit.normal.normalize_or(-dir);
             (n, n)
         }
+        HitNormals::Tube(segments) => {
+            let n = hit.normal.normalize_or(-dir);
+            let n = pbrt_tube_normal(&segments[hit.primitive as usize].0, hit.u, n, dir);
+            (n, n)
+        }
         HitNormals::FlatCurve => {
             let t = hit.normal.normalize_or_zero();
             let n = (t * dir.dot(t) - dir).normalize_or(-dir);
             (n, n)
         }
     }
+}
+
+/// pbrt's shading normal on a cylinder curve (segment `p`, parameter `u`), given the true
+/// tube's unit normal `n` at the hit of a ray along `dir`: the offset across the band facing
+/// the ray is s = n · a, with a = tangent × dir, pbrt's v is (s + 1)/2, and its normal is the
+/// band's ray-facing normal turned by θ = 90° · s away from a.
+fn pbrt_tube_normal(p: &[Vec3; 4], u: f32, n: Vec3, dir: Vec3) -> Vec3 {
+    let w = 1.0 - u;
+    let tangent = w * w * (p[1] - p[0]) + 2.0 * w * u * (p[2] - p[1]) + u * u * (p[3] - p[2]);
+    let across = tangent.cross(dir).normalize_or_zero();
+    if across == Vec3::ZERO {
+        return n;
+    }
+    let s = n.dot(across).clamp(-1.0, 1.0);
+    let facing = (n - s * across).normalize_or(-dir);
+    let (sin, cos) = (std::f32::consts::FRAC_PI_2 * s).sin_cos();
+    (cos * facing - sin * across).normalize_or(n)
+}
+
+/// How far pbrt starts a ray off a tube hit with normal `n`: its error bound of twice the
+/// width at the hit in every axis, along the normal (2 w (|nx| + |ny| + |nz|)); `None` off
+/// tubes.
+pub(super) fn tube_offset(normals: &HitNormals, hit: &embree::Hit, n: Vec3) -> Option<f32> {
+    let HitNormals::Tube(segments) = normals else {
+        return None;
+    };
+    let r = segments[hit.primitive as usize].1;
+    let (u, w) = (hit.u, 1.0 - hit.u);
+    let radius =
+        w * w * w * r[0] + 3.0 * w * w * u * r[1] + 3.0 * w * u * u * r[2] + u * u * u * r[3];
+    Some(4.0 * radius * n.abs().element_sum())
 }

@@ -8,7 +8,7 @@
 //! part (as pbrt carries an instance's normals; a mirroring instance keeps its prototype's
 //! outside, where flattened triangles would turn with their winding).
 
-use super::hit_normals::{HitNormals, normals_at};
+use super::hit_normals::{HitNormals, normals_at, tube_offset};
 use super::{BoundingSphere, Surface, add_shape, aim};
 use crate::embree::{self, EmbreeError, SceneBuilder};
 use crate::scene::SceneDescription;
@@ -174,6 +174,26 @@ impl Instancing {
         let ng = (placed.normal_to_world * ng).normalize_or(Vec3::Z);
         let ns = (placed.normal_to_world * ns).normalize_or(ng);
         (ng, if ns.dot(ng) < 0.0 { -ns } else { ns })
+    }
+
+    /// How far a ray leaving a hit on a placed tube starts off it, in world units
+    /// ([`super::hit_normals::tube_offset`] in the object, scaled by the placement's largest
+    /// stretch); `None` off tubes.
+    pub(super) fn tube_offset(&self, instance: u32, hit: &embree::Hit, n: Vec3) -> Option<f32> {
+        let placed = self.placed(instance);
+        let parts = &self.prototypes[placed.prototype as usize];
+        let m = Mat3::from_mat4(placed.to_object);
+        // Normals go back to the object by the transpose of the placement's linear part.
+        let local_n = (m.inverse().transpose() * n).normalize_or(n);
+        let offset = tube_offset(&parts.normals[hit.geometry as usize], hit, local_n)?;
+        let shrink = [m.x_axis, m.y_axis, m.z_axis].map(Vec3::length);
+        Some(
+            offset
+                / shrink
+                    .into_iter()
+                    .fold(f32::INFINITY, f32::min)
+                    .max(f32::MIN_POSITIVE),
+        )
     }
 
     /// The surfaces of every prototype that is placed at least once.

@@ -47,9 +47,25 @@ pub struct Interaction {
     pub(crate) barycentric: Vec2,
     /// The instance the hit went through (`geometry` is then its prototype's), or `u32::MAX`.
     pub(crate) instance: u32,
+    /// How far a ray leaving the hit starts off it ([`World::ray_epsilon_at`]; more off a
+    /// tube, as pbrt leaves its curves).
+    pub(crate) ray_offset: f32,
 }
 
 impl Interaction {
+    /// The point a ray leaving the hit starts from on the side `n` points to (`n` a unit
+    /// normal of the hit, or its negation).
+    #[inline]
+    pub fn offset_along(&self, n: Vec3) -> Vec3 {
+        self.position + n * self.ray_offset
+    }
+
+    /// The start of a ray leaving the hit along `d`, on the side of `ng` it points to.
+    #[inline]
+    pub fn spawn(&self, ng: Vec3, d: Vec3) -> Vec3 {
+        self.offset_along(if d.dot(ng) >= 0.0 { ng } else { -ng })
+    }
+
     /// Whether a ray along `dir` arrives on the side the geometric normal points to.
     #[inline]
     pub fn entering(&self, dir: Vec3) -> bool {
@@ -105,7 +121,17 @@ fn add_shape(
         Shape::Curves(curves) => {
             let (kind, normals) = match curves.kind {
                 CurveKind::Flat => (embree::CurveKind::Flat, HitNormals::FlatCurve),
-                CurveKind::Cylinder => (embree::CurveKind::Round, HitNormals::SurfaceCurve),
+                CurveKind::Cylinder => (
+                    embree::CurveKind::Round,
+                    HitNormals::Tube(
+                        (curves
+                            .points
+                            .chunks_exact(4)
+                            .zip(curves.radii.chunks_exact(4)))
+                        .map(|(p, r)| ([p[0], p[1], p[2], p[3]], [r[0], r[1], r[2], r[3]]))
+                        .collect(),
+                    ),
+                ),
                 CurveKind::Ribbon => (embree::CurveKind::NormalOriented, HitNormals::SurfaceCurve),
             };
             let points: Vec<[f32; 4]> = (curves.points.iter().zip(&curves.radii))
@@ -590,11 +616,27 @@ impl World {
             None => normals_at(&self.normals[hit.geometry as usize], &hit, position, dir),
             Some(instance) => self.instancing.normals(instance, &hit, position, dir),
         };
+        let tube = match hit.instance {
+            None => hit_normals::tube_offset(
+                &self.normals[hit.geometry as usize],
+                &hit,
+                geometric_normal,
+            ),
+            Some(instance) => self
+                .instancing
+                .tube_offset(instance, &hit, geometric_normal),
+        };
+        let ray_offset = self.ray_epsilon_at(position).max(tube.unwrap_or(0.0));
         let mut barycentric = Vec2::new(hit.u, hit.v);
         if self.texturing.has_tubes
             && hit.instance.is_none()
-            && let Some(v) =
-                (self.texturing).tube_v(hit.geometry, hit.primitive, hit.u, geometric_normal, dir)
+            && let Some(v) = (self.texturing).tube_v(
+                hit.geometry,
+                hit.primitive,
+                hit.u,
+                hit.normal.normalize_or(-dir),
+                dir,
+            )
         {
             barycentric.y = v;
         }
@@ -608,6 +650,7 @@ impl World {
             primitive: hit.primitive,
             barycentric,
             instance: hit.instance.unwrap_or(u32::MAX),
+            ray_offset,
         }
     }
 }
