@@ -637,7 +637,7 @@ fn advance(
     path.bounces += 1;
     // Leave the surface on the side the new direction points to.
     let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
-    path.origin = hit.offset_along(side);
+    path.origin = world.offset_from(&hit, side);
     path.direction = next;
     path.bounces < bounce_limit(world)
 }

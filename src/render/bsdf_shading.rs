@@ -73,13 +73,13 @@ impl Integrator<'_> {
         let followed_lit = emission != Emission::CausticMap;
         // A point light behind rough glass reaches the eye through it only by a shadow ray
         // from the far side (the lobe's own samples never find it), as pbrt samples it.
-        let back =
-            (followed_lit && bsdf.transmits_spread(Part::Followed)).then(|| hit.offset_along(-ng));
+        let back = (followed_lit && bsdf.transmits_spread(Part::Followed))
+            .then(|| self.world.offset_from(hit, -ng));
         let at = At {
             hit,
             frame,
             wo,
-            p: hit.offset_along(ng),
+            p: self.world.offset_from(hit, ng),
             back,
             ng,
             ns,
@@ -172,7 +172,7 @@ impl Integrator<'_> {
             return Radiance::default();
         }
         let next = at.frame.to_world(s.wi);
-        let origin = at.hit.spawn(at.ng, next);
+        let origin = self.world.spawn_from(at.hit, at.ng, next);
         if s.delta {
             return weight * self.trace(origin, next, depth + 1, along, sampler, scratch);
         }

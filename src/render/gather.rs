@@ -222,7 +222,7 @@ impl Integrator<'_> {
                 };
                 throughput *= s.f * (s.wi.z.abs() / s.pdf);
                 let next = frame.to_world(s.wi);
-                o = hit.spawn(ng, next);
+                o = self.world.spawn_from(&hit, ng, next);
                 d = next;
                 continue;
             }
@@ -234,7 +234,7 @@ impl Integrator<'_> {
                 break;
             };
             throughput *= tint;
-            o = hit.spawn(ng, next);
+            o = self.world.spawn_from(&hit, ng, next);
             d = next;
         }
         gathered

@@ -199,7 +199,7 @@ impl Integrator<'_> {
                 self.shade_bsdf(hit, model, dir, depth, emission, sampler, scratch)
             }
             Material::Diffuse { albedo } => {
-                let p = hit.offset_along(ng);
+                let p = self.world.offset_from(hit, ng);
                 let query = Query {
                     position: hit.position,
                     normal: ns,
@@ -222,7 +222,15 @@ impl Integrator<'_> {
             }
             Material::Mirror { tint } if depth < self.max_depth => {
                 let r = reflect(dir, ns);
-                *tint * self.trace(hit.spawn(ng, r), r, depth + 1, emission, sampler, scratch)
+                *tint
+                    * self.trace(
+                        self.world.spawn_from(hit, ng, r),
+                        r,
+                        depth + 1,
+                        emission,
+                        sampler,
+                        scratch,
+                    )
             }
             Material::Glass {
                 ior,
@@ -243,7 +251,7 @@ impl Integrator<'_> {
                     };
                     return *tint
                         * self.trace(
-                            hit.spawn(ng, next),
+                            self.world.spawn_from(hit, ng, next),
                             next,
                             depth + 1,
                             emission,
@@ -252,10 +260,24 @@ impl Integrator<'_> {
                         );
                 }
                 let mut l = (f * *reflect_tint)
-                    * self.trace(hit.spawn(ng, r), r, depth + 1, emission, sampler, scratch);
+                    * self.trace(
+                        self.world.spawn_from(hit, ng, r),
+                        r,
+                        depth + 1,
+                        emission,
+                        sampler,
+                        scratch,
+                    );
                 if let Some(t) = refract(dir, ns, eta).filter(|_| f < 1.0) {
                     l += ((1.0 - f) * *transmit_tint)
-                        * self.trace(hit.spawn(ng, t), t, depth + 1, emission, sampler, scratch);
+                        * self.trace(
+                            self.world.spawn_from(hit, ng, t),
+                            t,
+                            depth + 1,
+                            emission,
+                            sampler,
+                            scratch,
+                        );
                 }
                 l
             }
@@ -290,7 +312,7 @@ impl Integrator<'_> {
                 return Vec3::ZERO;
             };
             throughput *= tint;
-            origin = hit.spawn(ng, next);
+            origin = self.world.spawn_from(&hit, ng, next);
             dir = next;
         }
         Vec3::ZERO
@@ -380,7 +402,7 @@ impl Integrator<'_> {
                 };
             }
             throughput *= tint;
-            origin = hit.spawn(ng, next);
+            origin = self.world.spawn_from(&hit, ng, next);
             dir = next;
         }
         chain

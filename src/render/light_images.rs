@@ -264,7 +264,7 @@ pub fn chain_end(world: &World, camera: &RayCamera, film: Vec2, code: u64) -> Op
         let (ng, ns) = hit.facing(dir);
         let (next, _, _) = chosen_specular(&world.material_at(m, &hit), &hit, dir, ns, refracts)?;
         let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
-        origin = hit.offset_along(side);
+        origin = world.offset_from(&hit, side);
         dir = next;
     }
     Some((origin, dir))

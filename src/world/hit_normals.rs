@@ -145,15 +145,17 @@ fn pbrt_tube_normal(p: &[Vec3; 4], u: f32, n: Vec3, dir: Vec3) -> Vec3 {
     (cos * facing - sin * across).normalize_or(n)
 }
 
-/// How far pbrt starts a ray off a tube hit with normal `n`: its error bound of twice the
+/// How far pbrt starts a ray off a tube hit (segment `primitive`, parameter `u`) with normal
+/// `n`: its error bound of twice the
 /// width at the hit in every axis, along the normal (2 w (|nx| + |ny| + |nz|)); `None` off
 /// tubes.
-pub(super) fn tube_offset(normals: &HitNormals, hit: &embree::Hit, n: Vec3) -> Option<f32> {
+#[inline(always)]
+pub(super) fn tube_offset(normals: &HitNormals, primitive: u32, u: f32, n: Vec3) -> Option<f32> {
     let HitNormals::Tube(segments) = normals else {
         return None;
     };
-    let r = segments[hit.primitive as usize].1;
-    let (u, w) = (hit.u, 1.0 - hit.u);
+    let r = segments[primitive as usize].1;
+    let w = 1.0 - u;
     let radius =
         w * w * w * r[0] + 3.0 * w * w * u * r[1] + 3.0 * w * u * u * r[2] + u * u * u * r[3];
     Some(4.0 * radius * n.abs().element_sum())

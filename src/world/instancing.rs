@@ -179,13 +179,20 @@ impl Instancing {
     /// How far a ray leaving a hit on a placed tube starts off it, in world units
     /// ([`super::hit_normals::tube_offset`] in the object, scaled by the placement's largest
     /// stretch); `None` off tubes.
-    pub(super) fn tube_offset(&self, instance: u32, hit: &embree::Hit, n: Vec3) -> Option<f32> {
+    pub(super) fn tube_offset(
+        &self,
+        instance: u32,
+        geometry: u32,
+        primitive: u32,
+        u: f32,
+        n: Vec3,
+    ) -> Option<f32> {
         let placed = self.placed(instance);
         let parts = &self.prototypes[placed.prototype as usize];
         let m = Mat3::from_mat4(placed.to_object);
         // Normals go back to the object by the transpose of the placement's linear part.
         let local_n = (m.inverse().transpose() * n).normalize_or(n);
-        let offset = tube_offset(&parts.normals[hit.geometry as usize], hit, local_n)?;
+        let offset = tube_offset(&parts.normals[geometry as usize], primitive, u, local_n)?;
         let shrink = [m.x_axis, m.y_axis, m.z_axis].map(Vec3::length);
         Some(
             offset

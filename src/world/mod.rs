@@ -47,25 +47,9 @@ pub struct Interaction {
     pub(crate) barycentric: Vec2,
     /// The instance the hit went through (`geometry` is then its prototype's), or `u32::MAX`.
     pub(crate) instance: u32,
-    /// How far a ray leaving the hit starts off it ([`World::ray_epsilon_at`]; more off a
-    /// tube, as pbrt leaves its curves).
-    pub(crate) ray_offset: f32,
 }
 
 impl Interaction {
-    /// The point a ray leaving the hit starts from on the side `n` points to (`n` a unit
-    /// normal of the hit, or its negation).
-    #[inline]
-    pub fn offset_along(&self, n: Vec3) -> Vec3 {
-        self.position + n * self.ray_offset
-    }
-
-    /// The start of a ray leaving the hit along `d`, on the side of `ng` it points to.
-    #[inline]
-    pub fn spawn(&self, ng: Vec3, d: Vec3) -> Vec3 {
-        self.offset_along(if d.dot(ng) >= 0.0 { ng } else { -ng })
-    }
-
     /// Whether a ray along `dir` arrives on the side the geometric normal points to.
     #[inline]
     pub fn entering(&self, dir: Vec3) -> bool {
@@ -208,6 +192,9 @@ pub struct World {
     pub caustic_guide: Vec<Option<Arc<aim_guide::ConeCells>>>,
     /// Diagonal of the scene's bounding box: sets the ray epsilon and the default radii.
     pub scale: f32,
+    /// Whether any shape, placed or in an object, is a tube (whose hits start rays further
+    /// off them, [`World::offset_from`]).
+    has_tubes: bool,
     /// Around every shape and light with a place: where the lights at infinity send photons from.
     pub bounds: BoundingSphere,
     /// The scene's lights prepared for sampling, in [`SceneDescription::lights`]' order.
@@ -392,7 +379,12 @@ impl World {
                     })
                     .collect(),
             };
+        let is_tube =
+            |shape: &Shape| matches!(shape, Shape::Curves(c) if c.kind == CurveKind::Cylinder);
+        let has_tubes = description.shapes.iter().any(is_tube)
+            || (description.prototypes.iter()).any(|p| p.shapes.iter().any(is_tube));
         let mut world = Self {
+            has_tubes,
             mixes_reading_photons,
             texturing,
             description,
@@ -467,6 +459,40 @@ impl World {
     pub fn ray_epsilon_at(&self, p: Vec3) -> f32 {
         self.ray_epsilon()
             .min(LOCAL_EPSILON * p.abs().max_element().max(1.0))
+    }
+
+    /// The point a ray leaving `hit` starts from on the side `n` points to (`n` a unit normal
+    /// of the hit, or its negation): [`World::ray_epsilon_at`] off it, or off a tube as far as
+    /// pbrt starts rays off its curves.
+    #[inline]
+    pub fn offset_from(&self, hit: &Interaction, n: Vec3) -> Vec3 {
+        let mut offset = self.ray_epsilon_at(hit.position);
+        if self.has_tubes {
+            let (primitive, u) = (hit.primitive, hit.barycentric.x);
+            let tube = match hit.instance {
+                u32::MAX => hit_normals::tube_offset(
+                    &self.normals[hit.geometry as usize],
+                    primitive,
+                    u,
+                    hit.geometric_normal,
+                ),
+                instance => (self.instancing).tube_offset(
+                    instance,
+                    hit.geometry,
+                    primitive,
+                    u,
+                    hit.geometric_normal,
+                ),
+            };
+            offset = offset.max(tube.unwrap_or(0.0));
+        }
+        hit.position + n * offset
+    }
+
+    /// The start of a ray leaving `hit` along `d`, on the side of `ng` it points to.
+    #[inline]
+    pub fn spawn_from(&self, hit: &Interaction, ng: Vec3, d: Vec3) -> Vec3 {
+        self.offset_from(hit, if d.dot(ng) >= 0.0 { ng } else { -ng })
     }
 
     /// Material `id` as the scene gives it: its untextured values (a textured parameter's
@@ -616,17 +642,6 @@ impl World {
             None => normals_at(&self.normals[hit.geometry as usize], &hit, position, dir),
             Some(instance) => self.instancing.normals(instance, &hit, position, dir),
         };
-        let tube = match hit.instance {
-            None => hit_normals::tube_offset(
-                &self.normals[hit.geometry as usize],
-                &hit,
-                geometric_normal,
-            ),
-            Some(instance) => self
-                .instancing
-                .tube_offset(instance, &hit, geometric_normal),
-        };
-        let ray_offset = self.ray_epsilon_at(position).max(tube.unwrap_or(0.0));
         let mut barycentric = Vec2::new(hit.u, hit.v);
         if self.texturing.has_tubes
             && hit.instance.is_none()
@@ -650,7 +665,6 @@ impl World {
             primitive: hit.primitive,
             barycentric,
             instance: hit.instance.unwrap_or(u32::MAX),
-            ray_offset,
         }
     }
 }

@@ -92,7 +92,7 @@ impl<'w> Survey<'w> {
             let (ng, ns) = hit.facing(d);
             let spawn = |next: Vec3| {
                 let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
-                hit.offset_along(side)
+                world.offset_from(&hit, side)
             };
             match &world.material_at(m, &hit) {
                 // A camera path reads the photon maps at a BSDF's Lambert lobes and follows
