@@ -133,9 +133,7 @@ pub(super) fn normals_at(
 /// the ray is s = n · a, with a = tangent × dir, pbrt's v is (s + 1)/2, and its normal is the
 /// band's ray-facing normal turned by θ = 90° · s away from a.
 fn pbrt_tube_normal(p: &[Vec3; 4], u: f32, n: Vec3, dir: Vec3) -> Vec3 {
-    let w = 1.0 - u;
-    let tangent = w * w * (p[1] - p[0]) + 2.0 * w * u * (p[2] - p[1]) + u * u * (p[3] - p[2]);
-    let across = tangent.cross(dir).normalize_or_zero();
+    let across = tube_across(p, u, dir);
     if across == Vec3::ZERO {
         return n;
     }
@@ -145,10 +143,17 @@ fn pbrt_tube_normal(p: &[Vec3; 4], u: f32, n: Vec3, dir: Vec3) -> Vec3 {
     (cos * facing - sin * across).normalize_or(n)
 }
 
+/// The unit direction across the band pbrt draws for a cylinder curve's segment `p` at
+/// parameter `u`, seen along `dir`: the tangent × `dir` (zero where they are parallel).
+pub(super) fn tube_across(p: &[Vec3; 4], u: f32, dir: Vec3) -> Vec3 {
+    let w = 1.0 - u;
+    let tangent = w * w * (p[1] - p[0]) + 2.0 * w * u * (p[2] - p[1]) + u * u * (p[3] - p[2]);
+    tangent.cross(dir).normalize_or_zero()
+}
+
 /// How far pbrt starts a ray off a tube hit (segment `primitive`, parameter `u`) with normal
-/// `n`: its error bound of twice the
-/// width at the hit in every axis, along the normal (2 w (|nx| + |ny| + |nz|)); `None` off
-/// tubes.
+/// `n`: its error bound of twice the width at the hit in every axis, along the normal
+/// (2 w (|nx| + |ny| + |nz|)); `None` off tubes.
 #[inline(always)]
 pub(super) fn tube_offset(normals: &HitNormals, primitive: u32, u: f32, n: Vec3) -> Option<f32> {
     let HitNormals::Tube(segments) = normals else {

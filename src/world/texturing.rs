@@ -119,10 +119,7 @@ impl Texturing {
         let Some(GeometryUv::Tube(segments)) = self.uv.get(geometry as usize) else {
             return None;
         };
-        let [p0, p1, p2, p3] = segments[primitive as usize];
-        let w = 1.0 - u;
-        let tangent = w * w * (p1 - p0) + 2.0 * w * u * (p2 - p1) + u * u * (p3 - p2);
-        let across = tangent.cross(dir).normalize_or_zero();
+        let across = super::hit_normals::tube_across(&segments[primitive as usize], u, dir);
         Some((0.5 + 0.5 * normal.dot(across)).clamp(0.0, 1.0))
     }
 
