@@ -2,12 +2,14 @@
 """dpm against pbrt's own renders of a pbrt scene collection (docs/scene-format.md, "dpm
 against pbrt's images").
 
-    scripts/pbrt-fidelity.py COLLECTION DPM OUT [--pixels N] [--only NAME,NAME] [-- DPM_FLAGS...]
+    scripts/pbrt-fidelity.py COLLECTION DPM OUT [--pixels N] [--only NAME,NAME]
+                             [--references DIR] [-- DPM_FLAGS...]
 
 COLLECTION is a checkout of a scene collection with pbrt's renders under images/ (for instance
 disini/pbrt-v3-scenes; nothing here fetches it), DPM a dpm binary. Every .pbrt file one folder
 deep whose Film names an image that exists as images/FOLDER/NAME.exr, and that `dpm check`
-would render, is rendered by dpm at its defaults (and DPM_FLAGS) at the film's resolution
+would render, is rendered by dpm at its defaults (and DPM_FLAGS) as pbrt reads it (a file
+without an Integrator line gets pbrt's default, --pbrt-default-integrator) at the film's resolution
 divided by the smallest whole factor that leaves at most --pixels (120,000) pixels in the
 image; pbrt's image is boxed down by the same factor. Writes OUT/table.md (scene, pbrt's
 integrator and maxdepth, dpm's seconds and passes, each channel's mean over pbrt's, the
@@ -16,7 +18,9 @@ two images' own noise: of all blocks and of the bright ones, whose reference mea
 a tenth of the image's) and OUT/NAME.png per scene: pbrt | dpm | their difference (grey is
 equal, red dpm brighter, blue darker, full at a factor of 2). Needs numpy, OpenEXR and Pillow
 (pip install numpy OpenEXR Pillow). The times are wall-clock: run it with nothing else on the
-machine.
+machine. --references DIR compares against DIR/FOLDER/NAME.exr instead of the collection's
+images (a pbrt build's own renders of the files, at the film's size or any whole fraction of
+it), each boxed down to dpm's size.
 """
 
 import re
@@ -120,6 +124,7 @@ def main():
         args, extra = args[:i], args[i + 1 :]
     pixels = int(arg(args, "--pixels", "120000"))
     only = arg(args, "--only", None)
+    references = arg(args, "--references", None)
     if len(args) != 3:
         sys.exit(__doc__)
     collection, dpm, out = Path(args[0]), args[1], Path(args[2])
@@ -142,8 +147,13 @@ def main():
         factor = 1
         while (reference.shape[0] // factor) * (reference.shape[1] // factor) > pixels:
             factor += 1
+        shown_width = reference.shape[1] // factor
+        if references:
+            reference = read_rgb(Path(references) / reference_path.relative_to(collection / "images"))
+        reference_factor = max(reference.shape[1] // shown_width, 1)
         image_path = out / (scene.stem + ".exr")
         command = [dpm, "render", str(scene), "-o", str(image_path),
+                   "--pbrt-default-integrator",
                    "--resolution", f"{width // factor}x{height // factor}"] + extra
         start = time.monotonic()
         run = subprocess.run(command, capture_output=True, text=True)
@@ -153,7 +163,7 @@ def main():
             rows.append(f"| {name} | {kind} | {depth} | failed (exit {run.returncode}) |||||")
             continue
         passes = re.search(r"\((\d+) passes?", run.stderr + run.stdout)
-        ratios, rel_mse, differs, bright, r, e = compare(box(reference, factor), read_rgb(image_path))
+        ratios, rel_mse, differs, bright, r, e = compare(box(reference, reference_factor), read_rgb(image_path))
         picture(r, e, out / (scene.stem + ".png"))
         rows.append(
             f"| {name} | {kind} | {depth} | {factor} | {seconds:.1f} | {passes.group(1) if passes else '?'} | "

@@ -54,6 +54,10 @@ struct CheckArgs {
     /// Count what `dpm render --strict` refuses (materials dpm approximates) as errors.
     #[arg(long)]
     strict: bool,
+    /// Read a pbrt scene without an `Integrator` line as pbrt does (`path`, maxdepth 5), as
+    /// `dpm render --pbrt-default-integrator` would.
+    #[arg(long)]
+    pbrt_default_integrator: bool,
 }
 
 /// The parsed command line. `--version` also names the Embree library in use, which takes a
@@ -172,6 +176,7 @@ fn main() -> ExitCode {
         Command::Check(args) => {
             let options = dpm::scene::LoadOptions {
                 strict: args.strict,
+                pbrt_default_integrator: args.pbrt_default_integrator,
             };
             let report = dpm::scene::check::check(&args.scene, &options);
             print!("{}", report.text());

@@ -504,7 +504,7 @@ fn materials_map_exactly_or_warn_once_and_strict_refuses_approximations() {
     assert!(sigma[0].contains("scene.pbrt:17:1"), "{sigma:?}");
     let dir = tempfile::tempdir().unwrap();
     let path = write_scene(dir.path(), "scene.pbrt", &text);
-    let e = scene::load_with_options(&path, &LoadOptions { strict: true }).unwrap_err();
+    let e = scene::load_with_options(&path, &LoadOptions::strict()).unwrap_err();
     assert_eq!((e.line, e.column), (Some(17), Some(1)), "{e}");
     assert!(e.message.contains("--strict"), "{e}");
 }
@@ -622,7 +622,7 @@ fn coated_layers_warn_where_dpm_approximates_them_and_strict_refuses_them() {
             .collect();
         assert_eq!(warned.len(), 1, "{material}: {:?}", report.warnings);
         let path = write_scene(dir.path(), "coat.pbrt", &text);
-        let e = scene::load_with_options(&path, &LoadOptions { strict: true }).unwrap_err();
+        let e = scene::load_with_options(&path, &LoadOptions::strict()).unwrap_err();
         assert!(e.message.contains("--strict") && e.line == Some(6), "{e}");
     }
     // A coated diffuse without a medium is within 0.03 of pbrt-v4's walk: no warning.

@@ -168,7 +168,7 @@ fn a_shape_that_only_bounds_a_medium_is_left_out_with_a_warning_and_refused_unde
     assert!(left_out[0].contains("scene.pbrt:") && left_out[0].contains("2 shape(s)"));
     let dir = tempfile::tempdir().unwrap();
     let path = write_scene(dir.path(), "scene.pbrt", &world(body));
-    let strict = scene::LoadOptions { strict: true };
+    let strict = scene::LoadOptions::strict();
     let e = scene::load_with_options(&path, &strict).unwrap_err();
     assert!(
         e.to_string().contains("participating medium") && e.line.is_some(),

@@ -167,7 +167,7 @@ fn a_colourful_amount_is_approximated_by_its_mean_with_a_warning_refused_under_s
     );
     let dir = tempfile::tempdir().unwrap();
     let path = support::write_scene(dir.path(), "scene.pbrt", &text);
-    let e = scene::load_with_options(&path, &LoadOptions { strict: true }).unwrap_err();
+    let e = scene::load_with_options(&path, &LoadOptions::strict()).unwrap_err();
     assert!(
         e.line == Some(8) && e.to_string().contains("--strict"),
         "{e}"

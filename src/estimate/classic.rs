@@ -168,6 +168,40 @@ impl KnnEstimate {
         self.kernel_sum(map, query, scratch, power_of)
     }
 
+    /// The irradiance estimate and how far its photons lie off the query's tangent plane: the
+    /// root mean square of `(x_i − x)·n` over the agreeing photons it summed, in radii (0 when
+    /// it found nothing). Photons on one flat or gently curved surface give nearly 0 (a sphere
+    /// of radius `R` read over radius `r` gives about `0.29 r/R`); photons scattered over many
+    /// small surfaces in the sphere, as many as above the plane as below, about `√(1/5) ≈ 0.45`.
+    /// There the estimate, which divides by the disc's area `π r²`, counts the photons of every
+    /// surface in the sphere as if they lay on one (see [`super::THICK_GATHER`]).
+    pub fn irradiance_and_thickness(
+        &self,
+        map: &PhotonMap,
+        query: &Query,
+        scratch: &mut Scratch,
+    ) -> (Vec3, f32) {
+        let (irradiance, radius2) = self.kernel_sum(map, query, scratch, power_of);
+        if radius2.is_nan() || radius2 <= 0.0 {
+            return (irradiance, 0.0);
+        }
+        let mut reader = PhotonReader::new(query.normal);
+        let (mut sum, mut count) = (0.0f64, 0u32);
+        for n in scratch.second.as_slice() {
+            if n.dist2 >= radius2 || !reader.agrees(map.attributes(n.slot)) {
+                continue;
+            }
+            let height = (map.position(n.slot) - query.position).dot(query.normal);
+            sum += f64::from(height * height);
+            count += 1;
+        }
+        let thickness = match count {
+            0 => 0.0,
+            _ => (sum / (f64::from(count) * f64::from(radius2))).sqrt() as f32,
+        };
+        (irradiance, thickness)
+    }
+
     /// The kernel-weighted sum of `weigh` over the k nearest agreeing photons, per unit area,
     /// and the squared radius it used (0: none).
     fn kernel_sum(

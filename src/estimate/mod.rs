@@ -111,6 +111,13 @@ pub fn normals_agree(photon: &Photon, normal: Vec3) -> bool {
     photon.normal().dot(normal) >= NORMAL_AGREEMENT_MIN_COS
 }
 
+/// The thickness ([`KnnEstimate::irradiance_and_thickness`]) past which a global-map estimate
+/// is not read: its photons lie on many surfaces within its sphere, not on the query's, so it
+/// overstates the irradiance by about the ratio of their area to the disc's (a cluster of
+/// 25,250 small statues read this way came out twice as bright as pbrt's path tracer). A
+/// sphere read over half its own radius stays below it.
+pub const THICK_GATHER: f32 = 0.15;
+
 /// Photon power as f64, for sums that must not overflow or lose the small terms.
 #[inline]
 pub(crate) fn power_f64(photon: &Photon) -> glam::DVec3 {

@@ -13,7 +13,7 @@ use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
 use crate::scene::Material;
 use crate::world::aim::UnionOfCones;
 use crate::world::lights::{self, Emission, LightEmitter};
-use crate::world::{BoundingSphere, ClosestHit, Surface, World};
+use crate::world::{BoundingSphere, ClosestHit, SHADING_AGREEMENT_MIN_COS, Surface, World};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -591,7 +591,13 @@ fn advance(
             if path.rng.next_f32() >= survive {
                 return false;
             }
-            let Some((next, weight)) = diffuse_bounce(world, hit.position, ns, &mut path.rng)
+            // A shading normal far from the face would send every photon its way.
+            let leaving = if ns.dot(ng) < SHADING_AGREEMENT_MIN_COS {
+                ng
+            } else {
+                ns
+            };
+            let Some((next, weight)) = diffuse_bounce(world, hit.position, leaving, &mut path.rng)
             else {
                 return false;
             };

@@ -211,6 +211,13 @@ pub struct RenderArgs {
     #[arg(long, help_heading = headings::EYE)]
     pub full_transport: bool,
 
+    /// Render a pbrt scene that has no `Integrator` line as pbrt does: `path`, maxdepth 5.
+    ///
+    /// Without it such a scene gets dpm's own transport, as a TOML scene does. With it dpm
+    /// renders what pbrt's own image of the file shows (`scripts/pbrt-fidelity.py` sets it).
+    #[arg(long, conflicts_with = "full_transport", help_heading = headings::EYE)]
+    pub pbrt_default_integrator: bool,
+
     /// Shadow rays per area light and per environment at each diffuse eye hit.
     ///
     /// Stratified and averaged, for sphere, quad and mesh lights and the environment; a

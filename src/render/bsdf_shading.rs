@@ -104,8 +104,16 @@ impl Integrator<'_> {
             out.caustic = self.caustic(&caustic, &query, scratch);
             if bsdf.has(Part::Broad) {
                 let broad = Reception::of(&bsdf, Part::Broad, frame, wo);
-                out.indirect =
-                    self.indirect(&broad, at.p, ns, diffuse_hit, &query, sampler, scratch);
+                out.indirect = self.indirect(
+                    &broad,
+                    at.p,
+                    (ng, ns, -dir),
+                    diffuse_hit,
+                    depth,
+                    &query,
+                    sampler,
+                    scratch,
+                );
             }
         }
         if !deeper {

@@ -6,9 +6,11 @@
 //! sampling themselves. Part of [`Integrator`]; owns that reading, must not build maps or
 //! touch pixels.
 
-use super::integrator::{EstimatedMap, Indirect, Integrator, sampled_specular};
+use super::integrator::{
+    CLUTTER_DEPTH, Emission, EstimatedMap, Indirect, Integrator, sampled_specular,
+};
 use crate::bsdf::{Bsdf, Part};
-use crate::estimate::{PrecomputedIrradiance, Query, Receiver, Scratch};
+use crate::estimate::{PrecomputedIrradiance, Query, Receiver, Scratch, THICK_GATHER};
 use crate::sampling::{Frame, PathSampler, Rng, cosine_hemisphere};
 use crate::scene::Material;
 use crate::world::Surface;
@@ -92,15 +94,17 @@ impl Integrator<'_> {
         }
     }
 
-    /// Indirect radiance reflected at a surface that reads photons (`p` offset off it, `n`
-    /// its normal on the ray's side, `at` the path's diffuse hit).
+    /// Indirect radiance reflected at a surface that reads photons (`p` offset off it, `ng`
+    /// and `n` its geometric and shading normals on the ray's side, `wo` the unit direction
+    /// back along the ray, `at` the path's diffuse hit, `depth` the path's depth there).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn indirect(
         &self,
         reception: &Reception,
         p: Vec3,
-        n: Vec3,
+        (ng, n, wo): (Vec3, Vec3, Vec3),
         at: u32,
+        depth: u32,
         query: &Query,
         sampler: &mut PathSampler,
         scratch: &mut Scratch,
@@ -111,13 +115,31 @@ impl Integrator<'_> {
             // piecewise-constant cells would be seen as such. A sparse one is read through
             // its split table, whose cells are smaller than its estimate's noise (see
             // `estimate::precomputed::ShownIrradiance`).
-            (Indirect::Visualize { map: g, table }, Reception::Lambert(reflectance)) => {
-                let e = table
-                    .and_then(|t| t.lookup(query, scratch))
-                    .unwrap_or_else(|| g.estimate.irradiance(g.map, query, scratch));
+            (
+                Indirect::Visualize {
+                    map,
+                    estimate,
+                    table,
+                },
+                Reception::Lambert(reflectance),
+            ) => {
+                if let Some(e) = table.and_then(|t| t.lookup(query, scratch)) {
+                    return *reflectance * (e * FRAC_1_PI);
+                }
+                let (e, thickness) = estimate.irradiance_and_thickness(map, query, scratch);
+                if thickness > THICK_GATHER && depth < CLUTTER_DEPTH {
+                    return *reflectance
+                        * self.traced_on(p, (ng, n, wo), at, depth, sampler, scratch);
+                }
                 *reflectance * (e * FRAC_1_PI)
             }
-            (Indirect::Visualize { map: g, .. }, glossy) => g.reflected(glossy, query, scratch),
+            (Indirect::Visualize { map, estimate, .. }, glossy) => {
+                let g = EstimatedMap {
+                    map,
+                    estimate: *estimate,
+                };
+                g.reflected(glossy, query, scratch)
+            }
             (
                 Indirect::FinalGather {
                     map,
@@ -162,6 +184,32 @@ impl Integrator<'_> {
                 sum / (*rays).max(1) as f32
             }
         }
+    }
+
+    /// The indirect light at a Lambert hit whose global-map estimate is thick, by the path
+    /// traced on: the mean radiance arriving over the cosine-weighted hemisphere of `n` (E/π)
+    /// less what the shadow rays at `p` counted already (emitters and the environment seen
+    /// next are [`Emission::Elsewhere`]'s). The next surface adds its own direct light, its
+    /// caustic estimate and its indirect light, read from the map there or traced on again.
+    /// As pbrt samples a Lambert lobe: around the shading normal on the side `wo` leaves by,
+    /// nothing from below the geometric one (a shading normal lying in its face, as
+    /// buddha-fractal's floor's does, gathers from the viewer's half of the sky only).
+    fn traced_on(
+        &self,
+        p: Vec3,
+        (ng, n, wo): (Vec3, Vec3, Vec3),
+        at: u32,
+        depth: u32,
+        sampler: &mut PathSampler,
+        scratch: &mut Scratch,
+    ) -> Vec3 {
+        let n = if n.dot(wo) < 0.0 { -n } else { n };
+        let d = cosine_hemisphere(n, sampler.gather_2d(at, 0, 1));
+        if d.dot(ng) <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let next = self.trace(p, d, depth + 1, Emission::Elsewhere, sampler, scratch);
+        next.total()
     }
 
     /// Radiance from the global map seen along a gather ray (through a few specular bounces).

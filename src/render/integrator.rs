@@ -9,12 +9,12 @@
 use super::gather::Reception;
 use crate::bsdf::Part;
 use crate::estimate::precomputed::ShownIrradiance;
-use crate::estimate::{PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
+use crate::estimate::{KnnEstimate, PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
 use crate::sampling::{Frame, PathSampler};
 use crate::scene::Material;
-use crate::world::{Interaction, Surface, World};
+use crate::world::{Interaction, SHADING_AGREEMENT_MIN_COS, Surface, World};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -76,14 +76,23 @@ pub struct EstimatedMap<'a> {
     pub estimate: &'a dyn RadianceEstimate,
 }
 
+/// Path depth (bounces from the eye, as [`Integrator::trace`] counts them) below which a
+/// Lambert hit whose global-map estimate is thick traces its indirect light on rather than
+/// reading the map: past it the map is read anyway, its error then weighed down by this many
+/// albedos.
+pub const CLUTTER_DEPTH: u32 = 8;
+
 /// How indirect diffuse light is found.
 #[derive(Clone, Copy)]
 pub enum Indirect<'a> {
     None,
     /// The global map's estimate at the eye ray's diffuse hit (it holds indirect photons only),
-    /// read through `table` at Lambertian hits where the map is sparse.
+    /// read through `table` at Lambertian hits where the map is sparse. Where the estimate's
+    /// photons lie on many surfaces at once ([`crate::estimate::THICK_GATHER`]) the path goes
+    /// on instead, up to [`CLUTTER_DEPTH`], and reads the map where it is thin.
     Visualize {
-        map: EstimatedMap<'a>,
+        map: &'a PhotonMap,
+        estimate: &'a KnnEstimate,
         table: Option<&'a ShownIrradiance>,
     },
     /// `rays` cosine-distributed gather rays, each reading the global map (which then holds
@@ -217,7 +226,16 @@ impl Integrator<'_> {
                 Radiance {
                     direct,
                     caustic: self.caustic(&reception, &query, scratch),
-                    indirect: self.indirect(&reception, p, ns, at, &query, sampler, scratch),
+                    indirect: self.indirect(
+                        &reception,
+                        p,
+                        (ng, ns, -dir),
+                        at,
+                        depth,
+                        &query,
+                        sampler,
+                        scratch,
+                    ),
                 }
             }
             Material::Mirror { tint } if depth < self.max_depth => {
@@ -424,8 +442,13 @@ impl Integrator<'_> {
             };
             let mut sum = Vec3::ZERO;
             for j in 0..count {
-                let Some(s) = light.sample_incident(p, ng, sampler.light_2d(at, l, j, count))
-                else {
+                let u = sampler.light_2d(at, l, j, count);
+                let sample = if ns.dot(ng) < SHADING_AGREEMENT_MIN_COS {
+                    light.sample_incident_wide(p, ng, u)
+                } else {
+                    light.sample_incident(p, ng, u)
+                };
+                let Some(s) = sample else {
                     continue;
                 };
                 if ng.dot(s.direction) <= 0.0 {

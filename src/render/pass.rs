@@ -387,23 +387,21 @@ impl PassContext<'_> {
                 _ => None,
             },
             indirect: match &global {
-                Some((map, _)) if !map.is_empty() => {
-                    let m = EstimatedMap {
+                Some((map, _)) if !map.is_empty() => match self.settings.final_gather {
+                    0 => Indirect::Visualize {
                         map,
                         estimate: &global_estimate,
-                    };
-                    match self.settings.final_gather {
-                        0 => Indirect::Visualize {
-                            map: m,
-                            table: tables.shown.as_ref(),
+                        table: tables.shown.as_ref(),
+                    },
+                    rays => Indirect::FinalGather {
+                        map: EstimatedMap {
+                            map,
+                            estimate: &global_estimate,
                         },
-                        rays => Indirect::FinalGather {
-                            map: m,
-                            rays,
-                            precomputed: tables.gather.as_ref(),
-                        },
-                    }
-                }
+                        rays,
+                        precomputed: tables.gather.as_ref(),
+                    },
+                },
                 _ => Indirect::None,
             },
             max_depth: self.settings.max_depth,

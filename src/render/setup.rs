@@ -34,6 +34,7 @@ pub fn load_world(args: &RenderArgs, times: &mut PhaseTimes) -> Result<(World, u
     let (mut description, report) = times.time("load scene", || {
         let options = scene::LoadOptions {
             strict: args.strict,
+            pbrt_default_integrator: args.pbrt_default_integrator,
         };
         scene::load_with_options(&args.scene, &options)
     })?;

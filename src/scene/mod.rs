@@ -507,6 +507,19 @@ pub struct LoadOptions {
     /// Refuse what would otherwise be mapped with a warning (a pbrt material dpm cannot
     /// represent exactly).
     pub strict: bool,
+    /// Read a pbrt scene without an `Integrator` line as pbrt renders it (`path`, maxdepth
+    /// 5) instead of with dpm's own transport.
+    pub pbrt_default_integrator: bool,
+}
+
+impl LoadOptions {
+    /// `--strict`: refusing what dpm would approximate, nothing else changed.
+    pub fn strict() -> Self {
+        Self {
+            strict: true,
+            ..Self::default()
+        }
+    }
 }
 
 /// Reads and checks the scene file at `path` (TOML, or pbrt by the `.pbrt` extension); mesh

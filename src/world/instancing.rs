@@ -26,7 +26,16 @@ struct Placed {
     prototype: u32,
     to_object: Mat4,
     normal_to_world: Mat3,
+    /// The most a ray leaving a hit through it starts off the surface: [`OBJECT_EPSILON`] of
+    /// its box's diagonal.
+    epsilon: f32,
 }
+
+/// Largest ray offset off an instance, in its box's diagonals: the scene-wide offset of a
+/// big scene can jump clean through a small instance's thin parts (25,250 statues 0.2 units
+/// tall on a 300-unit floor let 5% more sky through than pbrt). Never below
+/// [`super::ROUNDING_MARGIN`] of the hit's distance from the origin.
+pub const OBJECT_EPSILON: f32 = 1e-3;
 
 /// Every prototype and instance of a world; empty for a scene without instances.
 #[derive(Default)]
@@ -110,12 +119,14 @@ impl Instancing {
                 instancing.first = id;
             }
             debug_assert_eq!(id, instancing.first + instancing.placed.len() as u32);
+            let placed = placed_box(m, *bounds);
             instancing.placed.push(Placed {
                 prototype: instance.prototype,
                 to_object: m.inverse(),
                 normal_to_world: Mat3::from_mat4(m).inverse().transpose(),
+                epsilon: OBJECT_EPSILON * (placed.1 - placed.0).length(),
             });
-            extent.boxes.push(placed_box(m, *bounds));
+            extent.boxes.push(placed);
             if specular.0.x <= specular.1.x {
                 extent.specular_boxes.push(placed_box(m, *specular));
             }
@@ -144,6 +155,12 @@ impl Instancing {
     pub(super) fn surface(&self, instance: u32, geometry: u32) -> Surface {
         let placed = self.placed(instance);
         self.prototypes[placed.prototype as usize].surfaces[geometry as usize]
+    }
+
+    /// The largest offset a ray leaving a hit through `instance` may start at.
+    #[inline]
+    pub(super) fn epsilon(&self, instance: u32) -> f32 {
+        self.placed(instance).epsilon
     }
 
     /// The prototype `instance` places, and the world point `position` in its space.

@@ -175,6 +175,18 @@ impl ClosestHit {
 /// the origin: some 8,000 times f32's rounding there, and far below any gap a scene models.
 pub const LOCAL_EPSILON: f32 = 1e-3;
 
+/// Below this cosine between a hit's shading and geometric normals the shading normal is
+/// taken to lie far from the face (pbrt's `"normal N"` may even lie in it): direct light from
+/// a uniform environment is then sampled wide
+/// ([`lights::LightSource::sample_incident_wide`]) and photons leave by the cosine to the
+/// face, so that the light a Lambert surface sends is the same in every direction, as pbrt's
+/// path tracer has it. Above it, as the shading normal says.
+pub const SHADING_AGREEMENT_MIN_COS: f32 = 0.9;
+
+/// The smallest ray offset a small instance's bound may leave, relative to the point's
+/// distance from the origin: 2⁻¹⁶, 128 times f32's rounding there.
+pub const ROUNDING_MARGIN: f32 = 1.0 / 65536.0;
+
 pub struct World {
     pub description: SceneDescription,
     accel: embree::Scene,
@@ -467,6 +479,11 @@ impl World {
     #[inline]
     pub fn offset_from(&self, hit: &Interaction, n: Vec3) -> Vec3 {
         let mut offset = self.ray_epsilon_at(hit.position);
+        if hit.instance != u32::MAX {
+            // Still some 128 times f32's rounding at the hit.
+            let rounding = ROUNDING_MARGIN * hit.position.abs().max_element();
+            offset = offset.min(self.instancing.epsilon(hit.instance).max(rounding));
+        }
         if self.has_tubes {
             let (primitive, u) = (hit.primitive, hit.barycentric.x);
             let tube = match hit.instance {

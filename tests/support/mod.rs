@@ -53,6 +53,11 @@ pub fn render_args(args: &[&str]) -> RenderArgs {
         .args
 }
 
+/// `dpm render` arguments as the command line parses them, or clap's refusal.
+pub fn try_render_args(args: &[&str]) -> Result<RenderArgs, clap::Error> {
+    Cli::try_parse_from(std::iter::once("dpm").chain(args.iter().copied())).map(|c| c.args)
+}
+
 /// `--passes 1` unless `args` already say how many passes to render.
 pub fn one_pass_unless_named(args: &[&str]) -> Vec<&'static str> {
     let named = ["--passes", "--time", "--save-photons", "--load-photons"];

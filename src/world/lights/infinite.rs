@@ -15,7 +15,7 @@
 //! drawn.
 
 use super::{Emission, IncidentSample};
-use crate::sampling::{Rng, basis, cosine_hemisphere, uniform_disc, uniform_sphere};
+use crate::sampling::{Rng, basis, cosine_hemisphere, uniform_cone, uniform_disc, uniform_sphere};
 use crate::world::BoundingSphere;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -193,6 +193,25 @@ impl Environment {
             distance: f32::INFINITY,
             irradiance: self.radiance * (PI / cos),
             pdf: cos / PI,
+        })
+    }
+
+    /// [`Environment::incident`] for a receiver whose shading normal is far from `n`: half
+    /// the directions cosine-weighted, half uniform over the hemisphere, so a grazing one
+    /// (which a shading normal lying in the face weighs fully) never brings more than 4πL.
+    pub(super) fn incident_wide(&self, n: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
+        let direction = if u.0 < 0.5 {
+            cosine_hemisphere(n, (2.0 * u.0, u.1))
+        } else {
+            uniform_cone(n, 0.0, (2.0 * u.0 - 1.0, u.1))
+        };
+        let cos = direction.dot(n);
+        let pdf = 0.5 * cos / PI + 0.25 / PI;
+        (cos > 0.0).then(|| IncidentSample {
+            direction,
+            distance: f32::INFINITY,
+            irradiance: self.radiance / pdf,
+            pdf,
         })
     }
 }

@@ -296,6 +296,19 @@ impl LightSource {
 }
 
 impl LightSource {
+    /// [`LightSource::sample_incident`] at a receiver that weighs light by the cosine to a
+    /// shading normal far from its surface's `n` (pbrt's matte with such "N"): a uniform
+    /// environment then also draws directions uniformly over the hemisphere (see
+    /// [`infinite::Environment::incident_wide`]), where the cosine to `n` alone gives grazing
+    /// directions unbounded weights (a floor whose normals lie in it sparkled). The same
+    /// expectation; other lights sample as ever.
+    pub fn sample_incident_wide(&self, x: Vec3, n: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
+        match &self.0 {
+            Kind::Environment(environment) => environment.incident_wide(n, u),
+            _ => self.sample_incident(x, n, u),
+        }
+    }
+
     /// The solid-angle density with which [`LightSource::sample_incident`] at `x` (normal `n`)
     /// draws the unit direction `dir`, given that a ray along it meets this light at distance
     /// `distance` where its surface's normal is `light_normal` (anything for the lights at

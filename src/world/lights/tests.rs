@@ -399,3 +399,31 @@ fn environment_samples_give_pi_radiance() {
     assert_eq!(light.radiance_at_infinity(), Vec3::new(0.5, 0.25, 1.0));
     assert_eq!(light.emitted_radiance(1.0), Vec3::ZERO);
 }
+
+/// A uniform sky seen by a receiver whose shading normal lies in its face (x, on the plane
+/// z = 0): ∫ over z > 0 of |ωx| dω is π, so the weighted mean is π L. The wide samples bring
+/// at most 4π L each; the cosine's alone, near the horizon, far more.
+#[test]
+fn a_sky_sampled_wide_keeps_its_expectation_and_bounds_every_weight() {
+    let radiance = Vec3::new(0.5, 1.0, 2.0);
+    let source = source(&Light::Environment { radiance });
+    let (n, ns) = (Vec3::Z, Vec3::X);
+    let (samples, mut sum, mut widest, mut narrow_widest) = (400_000, Vec3::ZERO, 0.0f32, 0.0f32);
+    for i in 0..samples {
+        let mut rng = Rng::for_index(4, Stream::Pixels, i);
+        let u = rng.next_2d();
+        if let Some(s) = source.sample_incident_wide(Vec3::ZERO, n, u) {
+            sum += s.irradiance * s.direction.dot(ns).abs();
+            widest = widest.max(s.irradiance.y * s.direction.dot(ns).abs());
+        }
+        if let Some(s) = source.sample_incident(Vec3::ZERO, n, u) {
+            narrow_widest = narrow_widest.max(s.irradiance.y * s.direction.dot(ns).abs());
+        }
+    }
+    let mean = sum / samples as f32;
+    for (got, l) in mean.to_array().into_iter().zip(radiance.to_array()) {
+        assert!((got / (PI * l) - 1.0).abs() < 0.01, "{mean}");
+    }
+    assert!(widest <= 4.0 * PI * 1.0001, "{widest}");
+    assert!(narrow_widest > 100.0 * PI, "{narrow_widest}");
+}

@@ -11,9 +11,20 @@ use crate::scene::{PBRT_DEFAULT_MAX_DEPTH, SceneError, Transport};
 const MAX_DEPTH_LIMIT: i64 = 1 << 20;
 
 impl Mapper<'_> {
-    /// The transport an `Integrator` line asks for; dpm's own where there is none.
+    /// The transport an `Integrator` line asks for; dpm's own where there is none, unless
+    /// pbrt's default integrator was asked for (`path`, maxdepth 5).
     pub(super) fn transport(&mut self, integrator: Option<&Item>) -> Result<Transport, SceneError> {
         let Some(item) = integrator else {
+            if self.default_integrator {
+                let transport = Transport::Paths {
+                    max_depth: PBRT_DEFAULT_MAX_DEPTH,
+                };
+                self.report.notes.push(format!(
+                    "no Integrator line: pbrt's default \"path\": {} (--pbrt-default-integrator)",
+                    transport.describe()
+                ));
+                return Ok(transport);
+            }
             return Ok(Transport::Full);
         };
         let depth = || -> Result<u32, SceneError> {

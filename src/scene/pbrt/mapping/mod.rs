@@ -35,6 +35,8 @@ pub(super) struct Mapper<'f> {
     files: &'f dyn SceneFiles,
     folder: PathBuf,
     strict: bool,
+    /// Whether a file without an `Integrator` line gets pbrt's default one.
+    default_integrator: bool,
     dialect: (Dialect, String),
     report: LoadReport,
     materials: Vec<Material>,
@@ -69,6 +71,7 @@ pub(super) fn scene(
         files,
         folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         strict: options.strict,
+        default_integrator: options.pbrt_default_integrator,
         dialect: parsed.dialect.dialect(),
         report: LoadReport::default(),
         materials: Vec::new(),
