@@ -181,25 +181,35 @@ impl KnnEstimate {
         query: &Query,
         scratch: &mut Scratch,
     ) -> (Vec3, f32) {
-        let (irradiance, radius2) = self.kernel_sum(map, query, scratch, power_of);
+        let Some(found2) = self.kth_radius2(map, query.position, scratch) else {
+            return (Vec3::ZERO, 0.0);
+        };
+        let radius2 = found2 as f64;
         if radius2.is_nan() || radius2 <= 0.0 {
-            return (irradiance, 0.0);
+            return (Vec3::ZERO, 0.0);
         }
+        // The sum of `kernel_sum`, in the same order, with the heights in the same loop.
         let mut reader = PhotonReader::new(query.normal);
-        let (mut sum, mut count) = (0.0f64, 0u32);
+        let kernel = self.prepared.for_radius2(radius2);
+        let (mut sum, mut heights, mut count) = (DVec3::ZERO, 0.0f32, 0u32);
         for n in scratch.second.as_slice() {
-            if n.dist2 >= radius2 || !reader.agrees(map.attributes(n.slot)) {
+            let d2 = n.dist2 as f64;
+            if d2 >= radius2 {
                 continue;
             }
-            let height = (map.position(n.slot) - query.position).dot(query.normal);
-            sum += f64::from(height * height);
-            count += 1;
+            let photon = map.attributes(n.slot);
+            if reader.agrees(photon) {
+                sum += kernel.weight(d2) * power_of(photon);
+                let height = (map.position(n.slot) - query.position).dot(query.normal);
+                heights += height * height;
+                count += 1;
+            }
         }
         let thickness = match count {
             0 => 0.0,
-            _ => (sum / (f64::from(count) * f64::from(radius2))).sqrt() as f32,
+            _ => (heights / (count as f32 * found2)).sqrt(),
         };
-        (irradiance, thickness)
+        (to_irradiance(sum / radius2), thickness)
     }
 
     /// The kernel-weighted sum of `weigh` over the k nearest agreeing photons, per unit area,
