@@ -4,8 +4,10 @@
 //! curve geometry. Owns the curve buffers' layout and the curve kinds' Embree types; like the
 //! rest of this folder it knows nothing of materials or scene files, and must not.
 
-use super::{EmbreeError, GeometryId, SceneBuilder, backend, new_buffer, sys, wrapper_error};
+use super::filters::{FilterSlot, HitFilter};
+use super::{EmbreeError, GeometryId, SceneBuilder, backend, new_buffer, shim, sys, wrapper_error};
 use glam::Vec3;
+use std::sync::Arc;
 
 /// Ray-facing quads Embree cuts each flat curve segment into (its default is 4, meant for
 /// sub-pixel hair; a curve seen close up shows the bends between them).
@@ -52,6 +54,38 @@ impl SceneBuilder {
         first_indices: &[u32],
         normals: Option<&[Vec3]>,
     ) -> Result<GeometryId, EmbreeError> {
+        self.add_curves_then(kind, control_points, first_indices, normals, |_| {})
+    }
+
+    /// [`Self::add_curves`] with a filter that may turn down any hit on them, for closest
+    /// hits and occlusion alike (pbrt's ribbon: a band facing the ray, only as wide there as
+    /// its normal faces the ray). Embree may ask about the same hit more than once, so
+    /// `filter` answers the same candidate the same way.
+    pub fn add_filtered_curves(
+        &mut self,
+        kind: CurveKind,
+        control_points: &[[f32; 4]],
+        first_indices: &[u32],
+        filter: Arc<dyn HitFilter>,
+    ) -> Result<GeometryId, EmbreeError> {
+        let (slot, user) = FilterSlot::boxed(filter);
+        let id = self.add_curves_then(kind, control_points, first_indices, None, |g| {
+            // SAFETY: live, uncommitted geometry; `user` points at the boxed `#[repr(C)]` slot,
+            // a `dpm_hit_filter`, which the scene keeps in place for as long as it lives.
+            unsafe { shim::dpm_rtc_set_hit_filter(g, user) };
+        })?;
+        self.filters.push(slot);
+        Ok(id)
+    }
+
+    fn add_curves_then(
+        &mut self,
+        kind: CurveKind,
+        control_points: &[[f32; 4]],
+        first_indices: &[u32],
+        normals: Option<&[Vec3]>,
+        finish: impl FnOnce(sys::RTCGeometry),
+    ) -> Result<GeometryId, EmbreeError> {
         check_curves(kind, control_points, first_indices, normals)?;
         let device = self.device.clone();
         self.attach(kind.geometry_type(), |g| {
@@ -72,6 +106,7 @@ impl SceneBuilder {
                 unsafe { sys::rtcSetGeometryTessellationRate(g, FLAT_CURVE_QUADS) };
                 device.check()?;
             }
+            finish(g);
             Ok(())
         })
     }

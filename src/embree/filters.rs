@@ -65,6 +65,19 @@ pub(super) struct FilterSlot {
     pub(super) filter: Arc<dyn HitFilter>,
 }
 
+impl FilterSlot {
+    /// A slot for `filter`, boxed so that its address, Embree's user data for the geometry
+    /// (returned beside it), stays put while the scene that keeps it lives.
+    pub(super) fn boxed(filter: Arc<dyn HitFilter>) -> (Box<Self>, *mut c_void) {
+        let mut slot = Box::new(FilterSlot {
+            accept: accept_candidate,
+            filter,
+        });
+        let user = &mut *slot as *mut FilterSlot as *mut c_void;
+        (slot, user)
+    }
+}
+
 pub(super) unsafe extern "C" fn accept_candidate(
     slot: *mut c_void,
     candidate: *const Candidate,

@@ -18,7 +18,7 @@ mod version;
 
 pub use curves::{CurveKind, FLAT_CURVE_QUADS};
 pub use filters::{Candidate, HitFilter};
-use filters::{FilterSlot, accept_candidate};
+use filters::FilterSlot;
 pub use threads::{
     MAX_THREADS, ThreadPoolError, enable_flush_to_zero, flush_to_zero_enabled, thread_pool,
 };
@@ -362,11 +362,7 @@ impl SceneBuilder {
         triangles: &[[u32; 3]],
         filter: Arc<dyn HitFilter>,
     ) -> Result<GeometryId, EmbreeError> {
-        let mut slot = Box::new(FilterSlot {
-            accept: accept_candidate,
-            filter,
-        });
-        let user = &mut *slot as *mut FilterSlot as *mut c_void;
+        let (slot, user) = FilterSlot::boxed(filter);
         let id = self.add_triangles_then(positions, triangles, |g| {
             // SAFETY: live, uncommitted geometry; `user` points at the boxed `#[repr(C)]` slot,
             // a `dpm_hit_filter`, which the scene keeps in place for as long as it lives.

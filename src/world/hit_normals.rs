@@ -3,7 +3,7 @@
 //! then its normals). Owns the normals' layout and their evaluation at a hit; must not decide
 //! what a surface is.
 //!
-//! A ribbon keeps nothing: its normal is the one Embree reports; a flat curve's (Embree
+//! A ribbon keeps its control normals ([`super::ribbon`]); a flat curve's normal (Embree
 //! reports its tangent) is the band's that faces the ray. A tube keeps its segments' control
 //! points and radii, for pbrt's normal and ray offset ([`HitNormals::Tube`]). A curve has no
 //! inside (a tube's is open at its ends), and like any open surface it is lit and seen on
@@ -24,8 +24,9 @@ pub(super) enum HitNormals {
     /// One normal for the whole geometry (a quad light's).
     Fixed(Vec3),
     Triangles(TriangleNormals),
-    /// A ribbon: Embree's geometric normal of the hit.
-    SurfaceCurve,
+    /// pbrt's ribbon, a flat band narrowed by its filter ([`super::ribbon`]): Embree reports
+    /// the tangent; the normal is the ribbon's, made perpendicular to it.
+    Ribbon(std::sync::Arc<super::ribbon::Ribbon>),
     /// A tube (pbrt's cylinder curve): each segment's four Bézier control points and radii.
     /// pbrt draws it as a band facing the ray whose normal turns about the tangent linearly
     /// across the band, 90° at its edges, away from the edge it is near (pbrt-v3's
@@ -111,8 +112,9 @@ pub(super) fn normals_at(
             let s = s.normalize_or(ng);
             (ng, if s.dot(ng) < 0.0 { -s } else { s })
         }
-        HitNormals::SurfaceCurve => {
-            let n = hit.normal.normalize_or(-dir);
+        HitNormals::Ribbon(ribbon) => {
+            let tangent = hit.normal.normalize_or_zero();
+            let n = ribbon.shading_normal(hit.primitive, hit.u, tangent, dir);
             (n, n)
         }
         HitNormals::Tube(segments) => {

@@ -11,6 +11,7 @@ mod cutout;
 mod hit_normals;
 mod instancing;
 pub mod lights;
+mod ribbon;
 pub mod texturing;
 
 use crate::embree::{self, EmbreeError};
@@ -116,13 +117,23 @@ fn add_shape(
                         .collect(),
                     ),
                 ),
-                CurveKind::Ribbon => (embree::CurveKind::NormalOriented, HitNormals::SurfaceCurve),
+                CurveKind::Ribbon => {
+                    let control = curves.normals.as_deref().unwrap_or_default();
+                    let ribbon = Arc::new(ribbon::Ribbon::new(control));
+                    (embree::CurveKind::Flat, HitNormals::Ribbon(ribbon))
+                }
             };
             let points: Vec<[f32; 4]> = (curves.points.iter().zip(&curves.radii))
                 .map(|(p, r)| [p.x, p.y, p.z, *r])
                 .collect();
             let first: Vec<u32> = (0..curves.segment_count() as u32).map(|k| 4 * k).collect();
-            builder.add_curves(kind, &points, &first, curves.normals.as_deref())?;
+            match &normals {
+                HitNormals::Ribbon(ribbon) => {
+                    let filter: Arc<dyn embree::HitFilter> = ribbon.clone();
+                    builder.add_filtered_curves(kind, &points, &first, filter)?
+                }
+                _ => builder.add_curves(kind, &points, &first, None)?,
+            };
             (normals, curves.bounds(), curves.material)
         }
     })
@@ -660,6 +671,11 @@ impl World {
             Some(instance) => self.instancing.normals(instance, &hit, position, dir),
         };
         let mut barycentric = Vec2::new(hit.u, hit.v);
+        if hit.instance.is_none()
+            && let HitNormals::Ribbon(ribbon) = &self.normals[hit.geometry as usize]
+        {
+            barycentric.y = ribbon.v(hit.primitive, hit.u, hit.v, dir);
+        }
         if self.texturing.has_tubes
             && hit.instance.is_none()
             && let Some(v) = (self.texturing).tube_v(

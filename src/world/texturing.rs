@@ -24,8 +24,9 @@ enum GeometryUv {
     /// A sphere's parametric (u, v) about its centre, measured along its own axes.
     Sphere { center: Vec3, to_object: Mat3 },
     /// A flat curve or a ribbon: u is Embree's parameter along the segment (pbrt's u, 0 to 1
-    /// on each segment of a pbrt curve), v across it is Embree's mapped to pbrt's 0 to 1 (from
-    /// −1 to 1 on a flat curve, already 0 to 1 on a ribbon).
+    /// on each segment of a pbrt curve), v across it is pbrt's 0 to 1 (Embree's −1 to 1 on a
+    /// flat curve mapped here; on a ribbon, whose band is narrowed, `resolve` puts it in
+    /// place, except through an instance).
     Band(CurveKind),
     /// A cylinder curve: u as on a band; Embree's hits on a tube carry no v, so the hit's v
     /// is pbrt's, worked out when the hit is resolved ([`Texturing::tube_v`]) from each
