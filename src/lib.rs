@@ -2,7 +2,7 @@
 //! with the `embree4` feature.
 //!
 //! The crate reads top to bottom as the data flows:
-//! scene description → Embree → photon tracing → photon map → radiance estimate → render (a
+//! scene description → Embree → media → photon tracing → photon map → radiance estimate → render (a
 //! loop of independent passes into a film) → image.
 //! Each stage is one module; each module's opening paragraph says what it owns and what it
 //! must not touch.
@@ -14,6 +14,7 @@ pub mod estimate;
 pub mod image_io;
 pub mod image_metrics;
 pub mod interrupt;
+pub mod media;
 pub mod optics;
 pub mod photon;
 pub mod render;

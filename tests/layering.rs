@@ -19,6 +19,7 @@ const LAYERS: &[&str] = &[
     "image_metrics",
     "scene",
     "embree",
+    "media",
     "world",
     "photon",
     "estimate",

@@ -17,8 +17,8 @@ mod threads;
 mod version;
 
 pub use curves::{CurveKind, FLAT_CURVE_QUADS};
-pub use filters::{Candidate, HitFilter};
 use filters::FilterSlot;
+pub use filters::{Candidate, HitFilter};
 pub use threads::{
     MAX_THREADS, ThreadPoolError, enable_flush_to_zero, flush_to_zero_enabled, thread_pool,
 };

@@ -1,0 +1,183 @@
+//! Media (issue 48's first stage): pbrt-v3's density grid against its definition, the majorant
+//! grid as a bound and its DDA as a partition of the ray, and delta and ratio tracking against
+//! the closed form on a constant grid and against brute-force quadrature of exp(−∫σt) on a
+//! random one. The phase function and the homogeneous medium are tested beside their code.
+
+use dpm::media::tracking::GridMedium;
+use dpm::media::{DensityGrid, MajorantGrid, MajorantSegment};
+use dpm::sampling::{Rng, Stream};
+use glam::{Mat4, UVec3, Vec3};
+
+fn random_grid(rng: &mut Rng, size: UVec3) -> DensityGrid {
+    let n = (size.x * size.y * size.z) as usize;
+    // Mostly empty, a few dense voxels: the wisps the majorant grid is for.
+    let values = (0..n)
+        .map(|_| {
+            let u = rng.next_f32();
+            if u < 0.7 { 0.0 } else { 4.0 * u * u }
+        })
+        .collect();
+    DensityGrid::new(size, values).unwrap()
+}
+
+#[test]
+fn the_density_is_trilinear_between_voxel_centres_and_fades_to_zero_outside() {
+    let grid = DensityGrid::new(UVec3::new(2, 1, 1), vec![1.0, 3.0]).unwrap();
+    let at = |x: f32, y: f32| grid.density(Vec3::new(x, y, 0.5));
+    for (x, want) in [
+        (0.25, 1.0),
+        (0.75, 3.0),
+        (0.5, 2.0),
+        (0.0, 0.5),
+        (1.0, 1.5),
+        (-0.01, 0.0),
+        (-0.3, 0.0),
+    ] {
+        assert!((at(x, 0.5) - want).abs() < 1e-6, "x = {x}: {}", at(x, 0.5));
+    }
+    // Half a voxel from the y border: three quarters of the way from outside's 0.
+    assert!((at(0.25, 0.25) - 0.75).abs() < 1e-6);
+    assert!(DensityGrid::new(UVec3::new(2, 2, 1), vec![1.0; 3]).is_none());
+    assert!(DensityGrid::new(UVec3::new(1, 1, 1), vec![-1.0]).is_none());
+    assert!(DensityGrid::new(UVec3::new(1, 1, 1), vec![f32::NAN]).is_none());
+}
+
+#[test]
+fn no_point_of_a_cell_reads_more_than_its_majorant() {
+    let mut rng = Rng::for_index(1, Stream::Pixels, 0);
+    let grid = random_grid(&mut rng, UVec3::new(7, 5, 3));
+    let majorants = MajorantGrid::new(&grid, 4);
+    for _ in 0..200_000 {
+        let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        assert!(grid.density(p) <= majorants.at(p) + 1e-5, "{p}");
+    }
+}
+
+#[test]
+fn the_dda_cuts_a_ray_into_consecutive_cells_each_with_its_own_bound() {
+    let mut rng = Rng::for_index(2, Stream::Pixels, 0);
+    let grid = random_grid(&mut rng, UVec3::new(9, 9, 9));
+    let majorants = MajorantGrid::new(&grid, 5);
+    for i in 0..2_000 {
+        let o = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 - 1.0;
+        let mut d = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+        if i % 10 == 0 {
+            d.y = if i % 20 == 0 { 0.0 } else { -0.0 }; // rays in a cell wall's plane
+        }
+        let mut segments: Vec<MajorantSegment> = Vec::new();
+        majorants.segments(o, d, 0.0, 10.0, |s| {
+            segments.push(s);
+            true
+        });
+        // Brute force: where along the ray the point is in the cube.
+        let inside = |t: f32| {
+            let p = o + d * t;
+            p.cmpge(Vec3::ZERO).all() && p.cmple(Vec3::ONE).all()
+        };
+        let steps = 4_000;
+        let covered = (0..steps)
+            .map(|k| 10.0 * (k as f32 + 0.5) / steps as f32)
+            .filter(|&t| inside(t))
+            .count();
+        let length: f32 = segments.iter().map(|s| s.t1 - s.t0).sum();
+        assert!(
+            (length - 10.0 * covered as f32 / steps as f32).abs() < 0.02,
+            "ray {i}: {length} against {covered} of {steps}"
+        );
+        for pair in segments.windows(2) {
+            assert!((pair[0].t1 - pair[1].t0).abs() < 1e-5, "ray {i}: {pair:?}");
+        }
+        for s in &segments {
+            for k in 0..8 {
+                let t = s.t0 + (s.t1 - s.t0) * (k as f32 + 0.5) / 8.0;
+                assert!(
+                    grid.density(o + d * t) <= s.majorant + 1e-5,
+                    "ray {i}: {s:?} at {t}"
+                );
+            }
+        }
+    }
+}
+
+/// exp(−∫σt) along the ray by the midpoint rule (σt per world length, `d` not unit).
+fn quadrature(medium: &GridMedium, o: Vec3, d: Vec3, t_max: f32) -> f64 {
+    let steps = 20_000;
+    let h = t_max as f64 / steps as f64 * d.length() as f64;
+    let optical: f64 = (0..steps)
+        .map(|k| {
+            let t = (k as f64 + 0.5) * t_max as f64 / steps as f64;
+            medium.sigma_t_at(o + d * t as f32) as f64 * h
+        })
+        .sum();
+    (-optical).exp()
+}
+
+#[test]
+fn ratio_and_delta_tracking_agree_with_the_closed_form_and_with_quadrature() {
+    let mut rng = Rng::for_index(3, Stream::Pixels, 0);
+    let place = Mat4::from_translation(Vec3::new(-1.0, 2.0, 0.5))
+        * Mat4::from_scale(Vec3::new(2.0, 1.0, 3.0));
+    let (sigma_a, sigma_s) = (Vec3::splat(0.3), Vec3::splat(0.9));
+    let constant = GridMedium::new(
+        DensityGrid::new(UVec3::splat(8), vec![1.0; 512]).unwrap(),
+        place,
+        sigma_a,
+        sigma_s,
+    )
+    .unwrap();
+    let random = GridMedium::new(
+        random_grid(&mut rng, UVec3::new(6, 7, 5)),
+        place,
+        sigma_a,
+        sigma_s,
+    )
+    .unwrap();
+    // Through the interior (more than half a voxel from the border), and across the whole box.
+    let rays = [
+        (
+            constant,
+            Vec3::new(-0.8, 2.2, 0.8),
+            Vec3::new(1.0, 0.3, 1.0),
+            1.2,
+            true,
+        ),
+        (
+            random.clone(),
+            Vec3::new(-1.5, 2.5, 0.0),
+            Vec3::new(1.2, 0.1, 1.0),
+            3.5,
+            false,
+        ),
+        (
+            random,
+            Vec3::new(1.2, 3.2, 3.8),
+            Vec3::new(-0.5, -0.3, -0.9),
+            4.0,
+            false,
+        ),
+    ];
+    for (i, (medium, o, d, t_max, closed)) in rays.into_iter().enumerate() {
+        let want = if closed {
+            (-1.2f64 * (d.length() * t_max) as f64).exp()
+        } else {
+            quadrature(&medium, o, d, t_max)
+        };
+        let n = 100_000;
+        let ratio: f64 = (0..n)
+            .map(|_| medium.transmittance(o, d, t_max, &mut rng) as f64)
+            .sum::<f64>()
+            / n as f64;
+        let passed = (0..n)
+            .filter(|_| medium.free_flight(o, d, t_max, &mut rng).is_none())
+            .count() as f64
+            / n as f64;
+        assert!(
+            (ratio / want - 1.0).abs() < 0.01,
+            "ray {i}: ratio tracking {ratio} against {want}"
+        );
+        assert!(
+            (passed - want).abs() < 4.0 * (want * (1.0 - want) / n as f64).sqrt() + 1e-3,
+            "ray {i}: delta tracking {passed} against {want}"
+        );
+    }
+}
