@@ -1,12 +1,18 @@
-//! Media (issue 48's first stage): pbrt-v3's density grid against its definition, the majorant
-//! grid as a bound and its DDA as a partition of the ray, and delta and ratio tracking against
-//! the closed form on a constant grid and against brute-force quadrature of exp(−∫σt) on a
-//! random one. The phase function and the homogeneous medium are tested beside their code.
+//! Media (issue 48's first stage): pbrt's `MakeNamedMedium` read as each version defines it
+//! (and refused, naming the place, where its values are bad), pbrt-v3's density grid against
+//! its definition, the majorant grid as a bound and its DDA as a partition of the ray, and
+//! delta and ratio tracking against the closed form on a constant grid and against
+//! brute-force quadrature of exp(−∫σt) on a random one. The phase function and the
+//! homogeneous medium are tested beside their code.
+
+mod support;
 
 use dpm::media::tracking::GridMedium;
 use dpm::media::{DensityGrid, MajorantGrid, MajorantSegment};
 use dpm::sampling::{Rng, Stream};
+use dpm::scene::{Medium, MediumKind};
 use glam::{Mat4, UVec3, Vec3};
+use support::pbrt::{load_text, world};
 
 fn random_grid(rng: &mut Rng, size: UVec3) -> DensityGrid {
     let n = (size.x * size.y * size.z) as usize;
@@ -179,5 +185,97 @@ fn ratio_and_delta_tracking_agree_with_the_closed_form_and_with_quadrature() {
             (passed - want).abs() < 4.0 * (want * (1.0 - want) / n as f64).sqrt() + 1e-3,
             "ray {i}: delta tracking {passed} against {want}"
         );
+    }
+}
+
+fn media_of(text: &str) -> Vec<Medium> {
+    let dir = tempfile::tempdir().unwrap();
+    load_text(dir.path(), text)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .0
+        .media
+}
+
+#[test]
+fn media_read_as_each_pbrt_defines_them() {
+    // pbrt-v3: whole milk unless told, `scale` on both; a grid placed by the transform in
+    // force times Translate(p0) · Scale(p1 − p0).
+    let media = media_of(&world(
+        "MakeNamedMedium \"milk\" \"string type\" \"homogeneous\" \"float scale\" 2\n\
+         Translate 1 2 3\n\
+         MakeNamedMedium \"smoke\" \"string type\" \"heterogeneous\" \"integer nx\" 2\n\
+         \"point p0\" [0 0 0.5] \"point p1\" [2 1 1.5] \"float density\" [0.5 1]\n\
+         \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [3 3 3] \"float g\" -0.3\nShape \"sphere\"\n",
+    ));
+    assert_eq!(media.len(), 2);
+    assert_eq!(
+        media[0].kind,
+        MediumKind::Homogeneous {
+            sigma_a: Vec3::new(0.0022, 0.0048, 0.028),
+            sigma_s: Vec3::new(5.1, 6.42, 7.54),
+        }
+    );
+    let MediumKind::Grid {
+        sigma_a,
+        sigma_s,
+        size,
+        density,
+        grid_to_world,
+    } = &media[1].kind
+    else {
+        panic!("{:?}", media[1]);
+    };
+    assert_eq!(
+        (*sigma_a, *sigma_s, *size),
+        (Vec3::ONE, Vec3::splat(3.0), [2, 1, 1])
+    );
+    assert_eq!(density, &vec![0.5, 1.0]);
+    assert_eq!(media[1].g, -0.3);
+    let corner = grid_to_world.transform_point3(Vec3::ONE);
+    assert!(
+        (corner - Vec3::new(3.0, 3.0, 4.5)).length() < 1e-5,
+        "{corner}"
+    );
+    // pbrt-v4: σa = σs = 1 unless told.
+    let v4 = media_of(&format!(
+        "ColorSpace \"srgb\"\n{}",
+        world("MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\nShape \"sphere\"\n")
+    ));
+    assert_eq!(
+        v4[0].kind,
+        MediumKind::Homogeneous {
+            sigma_a: Vec3::ONE,
+            sigma_s: Vec3::ONE
+        }
+    );
+}
+
+#[test]
+fn bad_media_are_refused_naming_their_place_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    for (body, field) in [
+        (
+            "\"string type\" \"homogeneous\" \"rgb sigma_a\" [1 -1 1]",
+            "sigma_a",
+        ),
+        ("\"string type\" \"homogeneous\" \"float g\" 1", "g"),
+        (
+            "\"string type\" \"heterogeneous\" \"integer nx\" 2 \"float density\" [1 2 3]",
+            "density",
+        ),
+        (
+            "\"string type\" \"heterogeneous\" \"float density\" [1] \"rgb sigma_s\" [1 2 3]",
+            "sigma_s",
+        ),
+        (
+            "\"string type\" \"heterogeneous\" \"float density\" [1] \"point p1\" [1 0 1]",
+            "p1",
+        ),
+        ("\"string type\" \"nanovdb\"", "MakeNamedMedium"),
+    ] {
+        let text = world(&format!("MakeNamedMedium \"m\" {body}\nShape \"sphere\"\n"));
+        let e = load_text(dir.path(), &text).unwrap_err();
+        assert_eq!((e.line, e.column.is_some()), (Some(6), true), "{e}");
+        assert!(e.field.contains(field), "{body}: {e}");
     }
 }

@@ -176,6 +176,9 @@ impl CheckReport {
         }
         match &self.scene {
             Some(scene) => {
+                for medium in &scene.media {
+                    let _ = writeln!(s, "note: {} (not rendered yet)", medium.describe());
+                }
                 let _ = writeln!(s, "summary: renders: {}", summary(scene));
             }
             None => {

@@ -18,6 +18,7 @@ mod document;
 pub mod environment;
 pub mod files;
 mod format;
+mod medium;
 mod mesh;
 pub mod metals;
 mod pbrt;
@@ -34,6 +35,7 @@ mod validate;
 
 pub use curves::{CurveKind, Curves, check_curves};
 pub use environment::{EnvironmentMap, SphereMapping};
+pub use medium::{Medium, MediumKind};
 pub use rules::{InvalidField, check_light, check_material, check_materials, check_mesh};
 pub use texture::{Cutout, Texture, TexturedMaterial, TexturedParameter};
 pub use transport::{PBRT_DEFAULT_MAX_DEPTH, Transport};
@@ -61,6 +63,8 @@ pub struct SceneDescription {
     pub response: ImageResponse,
     /// How far light is followed: a pbrt `Integrator` line's cap, or dpm's own.
     pub transport: Transport,
+    /// Participating media defined (pbrt's `MakeNamedMedium`), in order; not rendered yet.
+    pub media: Vec<Medium>,
 }
 
 /// A linear map from the rendered radiance to the written pixel values: a white balance (a
@@ -688,6 +692,7 @@ pub fn parse_with(
         textured_materials,
         response: ImageResponse::default(),
         transport: Transport::Full,
+        media: Vec::new(),
     };
     report
         .warnings

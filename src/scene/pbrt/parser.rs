@@ -44,6 +44,15 @@ pub(super) struct LightItem {
     pub ctm: Mat4,
 }
 
+/// `MakeNamedMedium`: its name, its parameters (`kind` its "string type") and the transform
+/// in force, which places a grid.
+#[derive(Debug)]
+pub(super) struct MediumItem {
+    pub name: String,
+    pub item: Item,
+    pub ctm: Mat4,
+}
+
 #[derive(Debug)]
 pub(super) struct ShapeItem {
     pub item: Item,
@@ -99,6 +108,7 @@ pub(super) struct Parsed {
     pub instances: Vec<InstanceItem>,
     /// In the order they are defined.
     pub textures: Vec<TextureItem>,
+    pub media: Vec<MediumItem>,
     /// Directives read and deliberately not used (Sampler, PixelFilter, ...), for the report.
     pub ignored: Vec<String>,
     pub warnings: Vec<String>,
@@ -353,8 +363,25 @@ impl Parser<'_> {
             }
             "MakeNamedMedium" => {
                 let name = args.string("name")?;
-                self.params(args)?;
+                let params = self.params(args)?;
+                let kind = (params.string("type"))
+                    .map_err(|e| args.param_error(e))?
+                    .ok_or_else(|| {
+                        place.error(
+                            "MakeNamedMedium",
+                            format!("\"{name}\" has no \"string type\""),
+                        )
+                    })?;
                 self.media_ignored(&place, &format!("MakeNamedMedium \"{name}\""));
+                self.out.media.push(MediumItem {
+                    name,
+                    item: Item {
+                        kind,
+                        params,
+                        at: place,
+                    },
+                    ctm: self.state.ctm,
+                });
             }
             "MediumInterface" => {
                 let mut names = vec![args.string("interior medium")?];
@@ -439,7 +466,7 @@ impl Parser<'_> {
             named += &format!(" and {} more", self.media.len() - MEDIA_NAMED);
         }
         self.out.warnings.push(format!(
-            "{place}: participating media are not supported; ignored: {named}"
+            "{place}: participating media are read but not rendered yet; left out: {named}"
         ));
     }
 

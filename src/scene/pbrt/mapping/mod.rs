@@ -14,6 +14,7 @@ mod glossy;
 mod integrator;
 mod lights;
 mod materials;
+mod media;
 mod mix;
 mod shapes;
 mod tessellated;
@@ -97,6 +98,10 @@ pub(super) fn scene(
     let film = m.film(parsed.film.as_ref(), parsed.camera.as_ref())?;
     let transport = m.transport(parsed.integrator.as_ref())?;
     let camera = m.camera(parsed.camera.as_ref(), film.resolution, film.crop)?;
+    let mut media = Vec::new();
+    for medium in &parsed.media {
+        media.extend(m.medium(medium)?);
+    }
     let mut lights = Vec::new();
     for light in &parsed.lights {
         lights.push(m.light(&light.item, &light.ctm)?);
@@ -187,6 +192,7 @@ pub(super) fn scene(
         response: film.response,
         textured_materials: m.textured_materials,
         transport,
+        media,
     };
     let mut report = m.report;
     report
