@@ -205,7 +205,9 @@ fn media_read_as_each_pbrt_defines_them() {
          Translate 1 2 3\n\
          MakeNamedMedium \"smoke\" \"string type\" \"heterogeneous\" \"integer nx\" 2\n\
          \"point p0\" [0 0 0.5] \"point p1\" [2 1 1.5] \"float density\" [0.5 1]\n\
-         \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [3 3 3] \"float g\" -0.3\nShape \"sphere\"\n",
+         \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [3 3 3] \"float g\" -0.3\nShape \"sphere\"\n\
+         AttributeBegin\nMaterial \"\"\nMediumInterface \"smoke\" \"\"\nShape \"sphere\"\n\
+         Shape \"sphere\" \"float radius\" 2\nAttributeEnd\nShape \"sphere\" \"float radius\" 3\n",
     ));
     assert_eq!(media.len(), 2);
     assert_eq!(
@@ -231,6 +233,13 @@ fn media_read_as_each_pbrt_defines_them() {
     );
     assert_eq!(density, &vec![0.5, 1.0]);
     assert_eq!(media[1].g, -0.3);
+    // Two shapes name the smoke in their MediumInterface; the scope ends with the attributes.
+    assert_eq!((media[0].bounded_by, media[1].bounded_by), (0, 2));
+    assert!(
+        media[1].describe().contains("bounded by 2 shapes"),
+        "{}",
+        media[1].describe()
+    );
     let corner = grid_to_world.transform_point3(Vec3::ONE);
     assert!(
         (corner - Vec3::new(3.0, 3.0, 4.5)).length() < 1e-5,

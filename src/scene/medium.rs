@@ -13,6 +13,8 @@ pub struct Medium {
     pub defined_at: String,
     /// Henyey–Greenstein asymmetry, |g| < 1.
     pub g: f32,
+    /// Shapes whose `MediumInterface` names it on either side.
+    pub bounded_by: usize,
     pub kind: MediumKind,
 }
 
@@ -57,8 +59,13 @@ impl Medium {
                 )
             }
         };
+        let bounds = match self.bounded_by {
+            0 => "no shape names it in a MediumInterface".to_string(),
+            1 => "bounded by 1 shape".to_string(),
+            n => format!("bounded by {n} shapes"),
+        };
         format!(
-            "medium \"{}\" ({}): {what}, g {}",
+            "medium \"{}\" ({}): {what}, g {}; {bounds}",
             self.name, self.defined_at, self.g
         )
     }

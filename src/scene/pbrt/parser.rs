@@ -64,6 +64,8 @@ pub(super) struct ShapeItem {
     pub area_light: Option<usize>,
     /// Index into [`Parsed::objects`] when the shape belongs to an object definition.
     pub object: Option<usize>,
+    /// The `MediumInterface` in force: the media inside and outside it ("" for none).
+    pub media: (String, String),
 }
 
 /// An `ObjectBegin` definition.
@@ -394,6 +396,9 @@ impl Parser<'_> {
                     names.push(s.clone());
                     args.tokens.next();
                 }
+                // One name is both sides.
+                let outside = names.get(1).unwrap_or(&names[0]).clone();
+                self.state.media = (names[0].clone(), outside);
                 let names: Vec<_> = names.iter().map(|n| format!("\"{n}\"")).collect();
                 self.media_ignored(&place, &format!("MediumInterface {}", names.join(" ")));
             }
@@ -424,6 +429,7 @@ impl Parser<'_> {
                     material: self.state.material,
                     area_light: self.state.area_light,
                     object: self.object,
+                    media: self.state.media.clone(),
                 });
             }
             "Include" | "Import" => self.include(directive, args)?,

@@ -96,6 +96,7 @@ impl Mapper<'_> {
             name: medium.name.clone(),
             defined_at: item.at.to_string(),
             g,
+            bounded_by: 0,
             kind,
         }))
     }

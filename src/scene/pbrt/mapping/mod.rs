@@ -102,6 +102,11 @@ pub(super) fn scene(
     for medium in &parsed.media {
         media.extend(m.medium(medium)?);
     }
+    for medium in &mut media {
+        medium.bounded_by = (parsed.shapes.iter())
+            .filter(|s| s.media.0 == medium.name || s.media.1 == medium.name)
+            .count();
+    }
     let mut lights = Vec::new();
     for light in &parsed.lights {
         lights.push(m.light(&light.item, &light.ctm)?);

@@ -36,6 +36,8 @@ pub(super) struct GraphicsState {
     pub area_light: Option<usize>,
     /// `Attribute` defaults per target, latest last.
     pub defaults: Vec<(AttributeTarget, Param)>,
+    /// The `MediumInterface` in force: the media inside and outside ("" for none).
+    pub media: (String, String),
 }
 
 impl Default for GraphicsState {
@@ -46,6 +48,7 @@ impl Default for GraphicsState {
             material: None,
             area_light: None,
             defaults: Vec::new(),
+            media: (String::new(), String::new()),
         }
     }
 }
