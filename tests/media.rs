@@ -260,6 +260,52 @@ fn media_read_as_each_pbrt_defines_them() {
 }
 
 #[test]
+fn a_preset_gives_its_measured_coefficients_as_each_pbrt_lets_them_be_overridden() {
+    // Jensen et al. 2001's apple: σ′s (2.29 2.39 1.97), σa (.0030 .0034 .046) per mm.
+    let apple = |version: &str| {
+        media_of(&format!(
+            "{version}{}",
+            world(
+                "MakeNamedMedium \"a\" \"string type\" \"homogeneous\" \"string preset\" \"Apple\"\n\
+                 \"rgb sigma_a\" [1 1 1]\nShape \"sphere\"\n"
+            )
+        ))[0]
+            .kind
+            .clone()
+    };
+    let s = Vec3::new(2.29, 2.39, 1.97);
+    // pbrt-v3: sigma_a overrides the preset's; pbrt-v4: the preset wins.
+    assert_eq!(
+        apple(""),
+        MediumKind::Homogeneous {
+            sigma_a: Vec3::ONE,
+            sigma_s: s
+        }
+    );
+    assert_eq!(
+        apple("ColorSpace \"srgb\"\n"),
+        MediumKind::Homogeneous {
+            sigma_a: Vec3::new(0.003, 0.0034, 0.046),
+            sigma_s: s
+        }
+    );
+    // An unknown name: whole milk, with a warning naming it.
+    let dir = tempfile::tempdir().unwrap();
+    let text = world(
+        "MakeNamedMedium \"b\" \"string type\" \"homogeneous\" \"string preset\" \"Pudding\"\nShape \"sphere\"\n",
+    );
+    let (scene, report) = load_text(dir.path(), &text).unwrap();
+    assert!(
+        matches!(scene.media[0].kind, MediumKind::Homogeneous { sigma_s, .. } if sigma_s == Vec3::new(2.55, 3.21, 3.77))
+    );
+    assert!(
+        report.warnings.iter().any(|w| w.contains("\"Pudding\"")),
+        "{:?}",
+        report.warnings
+    );
+}
+
+#[test]
 fn bad_media_are_refused_naming_their_place_and_field() {
     let dir = tempfile::tempdir().unwrap();
     for (body, field) in [

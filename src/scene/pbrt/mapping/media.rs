@@ -1,6 +1,8 @@
 //! pbrt's `MakeNamedMedium` as dpm reads it: a `homogeneous` medium and a density grid
 //! (pbrt-v3's `heterogeneous`, pbrt-v4's `uniformgrid`), with each version's defaults (pbrt-v3
-//! starts from whole milk's coefficients, pbrt-v4 from σa = σs = 1), `scale` multiplying both,
+//! starts from whole milk's coefficients, pbrt-v4 from σa = σs = 1), a `preset` of measured
+//! media (which `sigma_a` and `sigma_s` override in pbrt-v3 and do not in pbrt-v4), `scale`
+//! multiplying both,
 //! `g` the Henyey–Greenstein asymmetry, a grid placed by the transform in force times
 //! Translate(p0) · Scale(p1 − p0). Bad values exit 2 naming their field. Owns that reading;
 //! must not build media for rendering.
@@ -45,16 +47,26 @@ impl Mapper<'_> {
             Dialect::V3 => (WHOLE_MILK_SIGMA_A, WHOLE_MILK_SIGMA_S),
             Dialect::V4 => (Vec3::ONE, Vec3::ONE),
         };
-        if item.params.string("preset").map_err(p)?.is_some() {
-            self.warn(
-                &item.at,
-                format!(
-                    "{directive} \"{}\": \"preset\" is not read; its sigma_a and sigma_s, or the defaults, apply",
-                    medium.name
+        // pbrt-v3: a preset replaces the defaults and sigma_a, sigma_s override it; pbrt-v4:
+        // a preset wins.
+        let mut preset_wins = false;
+        if let Some(name) = item.params.string("preset").map_err(p)? {
+            match super::media_presets::preset(&name) {
+                Some((a, s)) => {
+                    (sigma_a, sigma_s) = (a, s);
+                    preset_wins = self.dialect.0 == Dialect::V4;
+                }
+                None => self.warn(
+                    &item.at,
+                    format!("{directive} \"{}\": no preset is named \"{name}\"; the defaults apply, as pbrt-v3 does", medium.name),
                 ),
-            );
+            }
         }
         for (name, value) in [("sigma_a", &mut sigma_a), ("sigma_s", &mut sigma_s)] {
+            if preset_wins {
+                item.params.mark_used(name);
+                continue;
+            }
             if let Some(v) = item.params.colour(name).map_err(p)? {
                 if !v.is_finite() || v.min_element() < 0.0 {
                     return Err(value_error(

@@ -15,6 +15,7 @@ mod integrator;
 mod lights;
 mod materials;
 mod media;
+mod media_presets;
 mod mix;
 mod shapes;
 mod tessellated;
