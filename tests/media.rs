@@ -289,6 +289,19 @@ fn a_preset_gives_its_measured_coefficients_as_each_pbrt_lets_them_be_overridden
             sigma_s: s
         }
     );
+    // pbrt-v4's `Attribute "medium"` gives the media defined after it their defaults.
+    let v4 = media_of(&format!(
+        "ColorSpace \"srgb\"\n{}",
+        world(
+            "AttributeBegin\nAttribute \"medium\" \"float g\" 0.5 \"rgb sigma_s\" [2 2 2]\n\
+             MakeNamedMedium \"c\" \"string type\" \"homogeneous\" \"rgb sigma_s\" [3 3 3]\nAttributeEnd\n\
+             MakeNamedMedium \"d\" \"string type\" \"homogeneous\"\nShape \"sphere\"\n"
+        )
+    ));
+    assert_eq!((v4[0].g, v4[1].g), (0.5, 0.0));
+    assert!(
+        matches!(v4[0].kind, MediumKind::Homogeneous { sigma_s, .. } if sigma_s == Vec3::splat(3.0))
+    );
     // An unknown name: whole milk, with a warning naming it.
     let dir = tempfile::tempdir().unwrap();
     let text = world(

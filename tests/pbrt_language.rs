@@ -141,7 +141,8 @@ fn media_are_ignored_with_one_warning_naming_them() {
     let (_, report) = loads(&world(
         "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1 1]\n\
          MediumInterface \"fog\" \"\"\nMediumInterface \"fog\"\nAttribute \"medium\" \"float g\" 0.5\n\
-         MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\"\nShape \"sphere\"\n",
+         MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\"\nMediumInterface \"\" \"fog\"\n\
+         Shape \"sphere\"\n",
     ));
     let media: Vec<_> = (report.warnings.iter())
         .filter(|w| w.contains("media"))
@@ -151,6 +152,8 @@ fn media_are_ignored_with_one_warning_naming_them() {
     assert!(w.contains("scene.pbrt:6:1: participating media"), "{w}");
     assert!(w.contains("MakeNamedMedium \"fog\""), "{w}");
     assert!(w.contains("MediumInterface \"fog\" \"\""), "{w}");
+    // `Attribute "medium"` is read (the media after it take its defaults), not left out.
+    assert!(w.contains("MakeNamedMedium \"smoke\"") && !w.contains("Attribute"), "{w}");
     assert!(w.contains("and 1 more"), "{w}");
 }
 

@@ -365,7 +365,8 @@ impl Parser<'_> {
             }
             "MakeNamedMedium" => {
                 let name = args.string("name")?;
-                let params = self.params(args)?;
+                let mut params = self.params(args)?;
+                params.add_defaults(&self.state.defaults_for(AttributeTarget::Medium));
                 let kind = (params.string("type"))
                     .map_err(|e| args.param_error(e))?
                     .ok_or_else(|| {

@@ -183,9 +183,6 @@ impl Parser<'_> {
             ));
         };
         let params = self.params(args)?;
-        if target == AttributeTarget::Medium {
-            self.media_ignored(&place, "Attribute \"medium\"");
-        }
         for p in params.params {
             self.state
                 .defaults
