@@ -153,7 +153,10 @@ fn media_are_ignored_with_one_warning_naming_them() {
     assert!(w.contains("MakeNamedMedium \"fog\""), "{w}");
     assert!(w.contains("MediumInterface \"fog\" \"\""), "{w}");
     // `Attribute "medium"` is read (the media after it take its defaults), not left out.
-    assert!(w.contains("MakeNamedMedium \"smoke\"") && !w.contains("Attribute"), "{w}");
+    assert!(
+        w.contains("MakeNamedMedium \"smoke\"") && !w.contains("Attribute"),
+        "{w}"
+    );
     assert!(w.contains("and 1 more"), "{w}");
 }
 

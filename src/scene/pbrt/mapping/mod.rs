@@ -108,6 +108,18 @@ pub(super) fn scene(
             .filter(|s| s.media.0 == medium.name || s.media.1 == medium.name)
             .count();
     }
+    // pbrt-v4 resolves the names once the whole file is read, so a medium may be defined
+    // after the shapes that name it; a name defined nowhere is an error.
+    for shape in &parsed.shapes {
+        for name in [&shape.media.0, &shape.media.1] {
+            if !name.is_empty() && !parsed.media.iter().any(|m| &m.name == name) {
+                return Err(shape.item.at.error(
+                    "MediumInterface",
+                    format!("the shape's MediumInterface names \"{name}\", which no MakeNamedMedium defines"),
+                ));
+            }
+        }
+    }
     let mut lights = Vec::new();
     for light in &parsed.lights {
         lights.push(m.light(&light.item, &light.ctm)?);
