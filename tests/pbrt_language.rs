@@ -162,7 +162,8 @@ fn media_are_ignored_with_one_warning_naming_them() {
 
 #[test]
 fn a_shape_that_only_bounds_a_medium_is_left_out_with_a_warning_and_refused_under_strict() {
-    let body = "Shape \"sphere\" \"float radius\" 0.3\nAttributeBegin\nMaterial \"\"\n\
+    let body = "MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\"\n\
+        Shape \"sphere\" \"float radius\" 0.3\nAttributeBegin\nMaterial \"\"\n\
         MediumInterface \"smoke\" \"\"\nTranslate 0 1 0\nShape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n\
         AttributeBegin\nMaterial \"interface\"\nShape \"sphere\"\nAttributeEnd\n";
     let (scene, report) = loads(&world(body));
