@@ -136,7 +136,7 @@ impl RadianceEstimate for KnnEstimate {
     }
 
     fn irradiance(&self, map: &PhotonMap, query: &Query, scratch: &mut Scratch) -> Vec3 {
-        self.kernel_sum(map, query, scratch, power_of).0
+        self.kernel_sum(map, query, scratch, power_of, |_| {}).0
     }
 
     fn reflected(
@@ -146,7 +146,7 @@ impl RadianceEstimate for KnnEstimate {
         receiver: &dyn Receiver,
         scratch: &mut Scratch,
     ) -> Vec3 {
-        self.kernel_sum(map, query, scratch, |p| weighed_power(p, receiver))
+        self.kernel_sum(map, query, scratch, |p| weighed_power(p, receiver), |_| {})
             .0
     }
 }
@@ -165,7 +165,7 @@ impl KnnEstimate {
         query: &Query,
         scratch: &mut Scratch,
     ) -> (Vec3, f32) {
-        self.kernel_sum(map, query, scratch, power_of)
+        self.kernel_sum(map, query, scratch, power_of, |_| {})
     }
 
     /// The irradiance estimate and how far its photons lie off the query's tangent plane: the
@@ -181,45 +181,29 @@ impl KnnEstimate {
         query: &Query,
         scratch: &mut Scratch,
     ) -> (Vec3, f32) {
-        let Some(found2) = self.kth_radius2(map, query.position, scratch) else {
-            return (Vec3::ZERO, 0.0);
-        };
-        let radius2 = found2 as f64;
-        if radius2.is_nan() || radius2 <= 0.0 {
-            return (Vec3::ZERO, 0.0);
-        }
-        // The sum of `kernel_sum`, in the same order, with the heights in the same loop.
-        let mut reader = PhotonReader::new(query.normal);
-        let kernel = self.prepared.for_radius2(radius2);
-        let (mut sum, mut heights, mut count) = (DVec3::ZERO, 0.0f32, 0u32);
-        for n in scratch.second.as_slice() {
-            let d2 = n.dist2 as f64;
-            if d2 >= radius2 {
-                continue;
-            }
-            let photon = map.attributes(n.slot);
-            if reader.agrees(photon) {
-                sum += kernel.weight(d2) * power_of(photon);
-                let height = (map.position(n.slot) - query.position).dot(query.normal);
-                heights += height * height;
-                count += 1;
-            }
-        }
+        let (mut heights, mut count) = (0.0f32, 0u32);
+        let (irradiance, radius2) = self.kernel_sum(map, query, scratch, power_of, |slot| {
+            let height = (map.position(slot) - query.position).dot(query.normal);
+            heights += height * height;
+            count += 1;
+        });
         let thickness = match count {
             0 => 0.0,
-            _ => (heights / (count as f32 * found2)).sqrt(),
+            _ => (heights / (count as f32 * radius2)).sqrt(),
         };
-        (to_irradiance(sum / radius2), thickness)
+        (irradiance, thickness)
     }
 
     /// The kernel-weighted sum of `weigh` over the k nearest agreeing photons, per unit area,
-    /// and the squared radius it used (0: none).
+    /// and the squared radius it used (0: none); `summed` sees the slot of each photon summed
+    /// (a no-op where nothing else is wanted, which the compiler removes).
     fn kernel_sum(
         &self,
         map: &PhotonMap,
         query: &Query,
         scratch: &mut Scratch,
         weigh: impl Fn(&PhotonAttributes) -> DVec3,
+        mut summed: impl FnMut(u32),
     ) -> (Vec3, f32) {
         let Some(found2) = self.kth_radius2(map, query.position, scratch) else {
             return (Vec3::ZERO, 0.0);
@@ -244,6 +228,7 @@ impl KnnEstimate {
             let photon = map.attributes(n.slot);
             if reader.agrees(photon) {
                 sum += kernel.weight(d2) * weigh(photon);
+                summed(n.slot);
             }
         }
         (to_irradiance(sum / radius2), found2)
