@@ -10,11 +10,15 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     let files = support::files(data, "scene.pbrt");
-    let strict = data.first().is_some_and(|b| b & 1 == 1);
+    let first = data.first().copied().unwrap_or(0);
+    let (strict, pbrt_default_integrator) = (first & 1 == 1, first & 2 == 2);
     match load_from(
         &support::scene_path("scene.pbrt"),
         &files,
-        &LoadOptions { strict },
+        &LoadOptions {
+            strict,
+            pbrt_default_integrator,
+        },
     ) {
         Ok((scene, _report)) => support::check_scene(&scene),
         Err(e) => support::check_error(&e),
