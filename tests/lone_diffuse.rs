@@ -222,7 +222,8 @@ fn a_global_map_cut_short_by_its_path_limit_stores_the_same_flux() {
     let flux = |max_paths: Option<u64>| {
         (1..=8)
             .map(|seed| {
-                let (map, counts) = trace_map_within(&world, kind, 50_000, max_paths, seed, &bar);
+                let (map, _, counts) =
+                    trace_map_within(&world, kind, 50_000, max_paths, seed, &bar);
                 if let Some(limit) = max_paths {
                     assert_eq!(counts.emitted, limit, "the limit binds");
                     assert!(map.len() < 50_000);

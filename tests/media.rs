@@ -194,6 +194,7 @@ fn media_of(text: &str) -> Vec<Medium> {
         .unwrap_or_else(|e| panic!("{e}"))
         .0
         .media
+        .media
 }
 
 #[test]
@@ -309,7 +310,7 @@ fn a_preset_gives_its_measured_coefficients_as_each_pbrt_lets_them_be_overridden
     );
     let (scene, report) = load_text(dir.path(), &text).unwrap();
     assert!(
-        matches!(scene.media[0].kind, MediumKind::Homogeneous { sigma_s, .. } if sigma_s == Vec3::new(2.55, 3.21, 3.77))
+        matches!(scene.media.media[0].kind, MediumKind::Homogeneous { sigma_s, .. } if sigma_s == Vec3::new(2.55, 3.21, 3.77))
     );
     assert!(
         report.warnings.iter().any(|w| w.contains("\"Pudding\"")),

@@ -137,50 +137,69 @@ fn attribute_defaults_hold_for_their_kind_within_their_scope() {
 }
 
 #[test]
-fn media_are_ignored_with_one_warning_naming_them() {
-    let (_, report) = loads(&world(
-        "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1 1]\n\
-         MediumInterface \"fog\" \"\"\nMediumInterface \"fog\"\nAttribute \"medium\" \"float g\" 0.5\n\
-         MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\"\nMediumInterface \"\" \"fog\"\n\
-         Shape \"sphere\"\n",
-    ));
-    let media: Vec<_> = (report.warnings.iter())
-        .filter(|w| w.contains("media"))
-        .collect();
-    assert_eq!(media.len(), 1, "{:?}", report.warnings);
-    let w = media[0];
-    assert!(w.contains("scene.pbrt:6:1: participating media"), "{w}");
-    assert!(w.contains("MakeNamedMedium \"fog\""), "{w}");
-    assert!(w.contains("MediumInterface \"fog\" \"\""), "{w}");
-    // `Attribute "medium"` is read (the media after it take its defaults), not left out.
+fn media_are_placed_where_pbrt_places_them_camera_lights_and_shapes() {
+    // pbrt-v3 takes the camera's medium at WorldEnd (the outside of the interface then in
+    // force), a light the outside medium where it is declared, a shape both sides.
+    let text = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1 1]\n\
+        MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\"\n\
+        LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+        MediumInterface \"\" \"fog\"\nLightSource \"point\" \"rgb I\" [1 1 1]\n\
+        AttributeBegin\nMediumInterface \"smoke\" \"fog\"\nMaterial \"glass\"\n\
+        Shape \"sphere\"\nAttributeEnd\nMaterial \"matte\"\nShape \"sphere\" \"float radius\" 0.1\n\
+        WorldEnd\n";
+    let (scene, report) = loads(text);
+    let media = &scene.media;
+    assert_eq!(media.media.len(), 2);
     assert!(
-        w.contains("MakeNamedMedium \"smoke\"") && !w.contains("Attribute"),
-        "{w}"
+        !report.warnings.iter().any(|w| w.contains("media")),
+        "{:?}",
+        report.warnings
     );
-    assert!(w.contains("and 1 more"), "{w}");
+    assert_eq!(media.camera, Some(0), "fog is in force at WorldEnd");
+    assert_eq!(media.light_media, vec![(0, 0)]);
+    let sides = scene::MediumInterface {
+        inside: Some(1),
+        outside: Some(0),
+    };
+    // The matte sphere takes the world's "" "fog": vacuum inside it, as in pbrt.
+    let hollow = scene::MediumInterface {
+        inside: None,
+        outside: Some(0),
+    };
+    assert_eq!(media.shape_interfaces, vec![(0, sides), (1, hollow)]);
+    // pbrt-v4 takes the camera's medium at `Camera`, where none is in force here.
+    let v4 = text.replace("\"glass\"", "\"dielectric\"");
+    assert_eq!(loads(&v4).0.media.camera, None);
+    let v4 = v4.replace("LookAt", "MediumInterface \"\" \"smoke\"\nLookAt");
+    assert_eq!(loads(&v4).0.media.camera, Some(1));
 }
 
 #[test]
-fn a_shape_that_only_bounds_a_medium_is_left_out_with_a_warning_and_refused_under_strict() {
+fn a_shape_that_only_bounds_a_medium_is_a_boundary_not_a_surface() {
     let body = "MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\"\n\
         Shape \"sphere\" \"float radius\" 0.3\nAttributeBegin\nMaterial \"\"\n\
         MediumInterface \"smoke\" \"\"\nTranslate 0 1 0\nShape \"sphere\" \"float radius\" 0.5\nAttributeEnd\n\
-        AttributeBegin\nMaterial \"interface\"\nShape \"sphere\"\nAttributeEnd\n";
+        AttributeBegin\nReverseOrientation\nMaterial \"interface\"\nMediumInterface \"smoke\" \"\"\n\
+        Shape \"sphere\"\nAttributeEnd\n";
     let (scene, report) = loads(&world(body));
-    assert_eq!(scene.shapes.len(), 1, "the medium boundaries are not there");
-    let left_out: Vec<_> = (report.warnings.iter())
-        .filter(|w| w.contains("medium-boundary"))
-        .collect();
-    assert_eq!(left_out.len(), 1, "{:?}", report.warnings);
-    assert!(left_out[0].contains("scene.pbrt:") && left_out[0].contains("2 shape(s)"));
+    assert_eq!(scene.shapes.len(), 1, "boundaries are not surfaces");
+    let boundaries = &scene.media.boundaries;
+    assert_eq!(boundaries.len(), 2, "{:?}", report.warnings);
+    let smoke_inside = scene::MediumInterface {
+        inside: Some(0),
+        outside: None,
+    };
+    assert_eq!(boundaries[0].interface, smoke_inside);
+    // A sphere's normal points out whatever pbrt's orientation: reversed, its sides swap.
+    let reversed = scene::MediumInterface {
+        inside: None,
+        outside: Some(0),
+    };
+    assert_eq!(boundaries[1].interface, reversed);
     let dir = tempfile::tempdir().unwrap();
     let path = write_scene(dir.path(), "scene.pbrt", &world(body));
     let strict = scene::LoadOptions::strict();
-    let e = scene::load_with_options(&path, &strict).unwrap_err();
-    assert!(
-        e.to_string().contains("participating medium") && e.line.is_some(),
-        "{e}"
-    );
+    assert!(scene::load_with_options(&path, &strict).is_ok());
 }
 
 /// Linear sRGB of a peak-normalised black body at `kelvin`.

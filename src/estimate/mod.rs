@@ -21,6 +21,7 @@
 //! less than 60° within one radius. The stored normal is quantised to about 1°, far inside
 //! that margin. How rejection interacts with k is documented in [`classic`].
 
+pub mod beam;
 pub mod classic;
 pub mod diffusion;
 pub mod flags;
@@ -52,6 +53,8 @@ pub struct Query {
 #[derive(Clone, Debug, Default)]
 pub struct Scratch {
     pub neighbours: Neighbours,
+    /// The beam radiance estimate's photons along a segment: where, and what each brings.
+    pub beam: Vec<(f32, glam::Vec3)>,
     pub second: Neighbours,
     /// The diffusion estimate's kernel inputs: offset from the query and power of each
     /// agreeing photon within the radius, gathered once by its analysis and summed by its

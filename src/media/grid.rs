@@ -29,6 +29,15 @@ impl DensityGrid {
         valid.then_some(Self { size, values })
     }
 
+    /// Voxels held.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
     pub fn size(&self) -> UVec3 {
         self.size
     }
@@ -109,6 +118,15 @@ impl MajorantGrid {
             }
         }
         Self { cells, values }
+    }
+
+    /// Cells held.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
     }
 
     fn cell(&self, c: IVec3) -> f32 {

@@ -14,12 +14,16 @@
 //!   outside) and the majorant grid a 3-D DDA walks (pbrt-v4's design: a thin wisp in a mostly
 //!   empty grid does not cost the densest voxel's steps).
 //! - [`tracking`]: delta and ratio tracking over the majorant segments.
+//! - [`medium`]: one medium whatever its kind, as transport asks of it: transmittance, free
+//!   flights and the phase function.
 
 pub mod grid;
 pub mod homogeneous;
+pub mod medium;
 pub mod phase;
 pub mod tracking;
 
 pub use grid::{DensityGrid, MajorantGrid, MajorantSegment};
 pub use homogeneous::{FreeFlight, Homogeneous};
+pub use medium::Medium;
 pub use phase::HenyeyGreenstein;

@@ -60,6 +60,11 @@ impl GridMedium {
         self.sigma_t * self.density.density(self.to_grid.transform_point3(p))
     }
 
+    /// Bytes of its density and majorant grids.
+    pub fn bytes(&self) -> usize {
+        4 * (self.density.len() + self.majorants.len())
+    }
+
     /// What a real collision multiplies a path's throughput by: the albedo.
     pub fn albedo(&self) -> Vec3 {
         self.albedo

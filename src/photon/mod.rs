@@ -4,12 +4,16 @@
 //! Embree except through [`crate::world`].
 
 mod bsdf_scatter;
+mod emitter;
 pub mod guide;
 pub mod kdtree;
 pub mod map;
+mod medium_scatter;
 pub mod record;
 pub mod store;
+pub mod traced;
 pub mod tracer;
+pub mod volume;
 
 pub use kdtree::{KdTree, Neighbours};
 pub use map::PhotonMap;

@@ -7,13 +7,20 @@
 //! Determinism: path `i` draws only from `Rng::for_index(seed, stream, i)` and paths are kept in
 //! index order, so the maps are identical whatever the thread count.
 
-use super::{EncodedDirections, Photon, PhotonAttributes, PhotonMap};
+pub(super) use super::emitter::{Emitter, PathStart};
+use super::medium_scatter::scatter_in_medium;
+use super::traced::IN_VOLUME;
+pub(super) use super::traced::TracedPhoton;
+pub use super::traced::TracedPhotons;
+use super::volume::VolumePhoton;
+use super::{EncodedDirections, PhotonMap};
 use crate::optics::{reflect, scatter_dielectric};
-use crate::sampling::{Rng, Stream, StreamSeed, cosine_hemisphere};
+use crate::sampling::{Rng, cosine_hemisphere};
 use crate::scene::Material;
+use crate::scene::MediumId;
 use crate::world::aim::UnionOfCones;
-use crate::world::lights::{self, Emission, LightEmitter};
-use crate::world::{BoundingSphere, ClosestHit, SHADING_AGREEMENT_MIN_COS, Surface, World};
+use crate::world::participating::Flight;
+use crate::world::{ClosestHit, SHADING_AGREEMENT_MIN_COS, Surface, World};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -37,154 +44,6 @@ pub struct TraceCounts {
 
 /// Paths longer than this are cut: a photon trapped between mirrors must not loop forever.
 const MAX_BOUNCES: u32 = 32;
-
-/// A photon as traced, before the flux is divided by the number of paths emitted (32 bytes:
-/// the directions are encoded as stored, since their encoding does not depend on that number).
-#[derive(Clone, Copy)]
-pub(super) struct TracedPhoton {
-    pub(super) position: Vec3,
-    pub(super) flux: Vec3,
-    pub(super) directions: EncodedDirections,
-    /// The path that stored it, counted from the first path of its chunk: where a pass that
-    /// reaches its target stops counting.
-    path_in_chunk: u32,
-}
-
-impl TracedPhoton {
-    /// The stored photon, its flux multiplied by `scale` (one over the paths emitted).
-    fn record(&self, scale: f32) -> Photon {
-        Photon::with_directions(self.position, self.flux * scale, self.directions)
-    }
-}
-
-/// Splits photon paths among the lights in proportion to their power.
-struct LightChooser {
-    cdf: Vec<f32>,
-    /// Probability of each light.
-    pdf: Vec<f32>,
-}
-
-impl LightChooser {
-    fn new(world: &World) -> Option<Self> {
-        let w: Vec<f32> = (world.light_sources.iter())
-            .map(|l| lights::weight(l.power()))
-            .collect();
-        let total: f32 = w.iter().sum();
-        if total.is_nan() || total <= 0.0 || !total.is_finite() {
-            return None;
-        }
-        let pdf: Vec<f32> = w.iter().map(|x| x / total).collect();
-        let mut acc = 0.0;
-        let cdf = pdf.iter().map(|p| {
-            acc += p;
-            acc
-        });
-        Some(Self {
-            cdf: cdf.collect(),
-            pdf,
-        })
-    }
-
-    fn pick(&self, u: f32) -> usize {
-        self.cdf
-            .iter()
-            .position(|&c| u < c)
-            .unwrap_or(self.cdf.len() - 1)
-    }
-}
-
-/// How the paths of one pass start: which light, aimed where, with which random numbers.
-pub(super) struct Emitter<'w> {
-    pub(super) world: &'w World,
-    chooser: LightChooser,
-    /// One per light, in the scene's order.
-    lights: Vec<LightEmitter>,
-    streams: StreamSeed,
-    ray_epsilon: f32,
-}
-
-/// The start of a path that carries flux.
-pub(super) struct PathStart {
-    /// The light it left, in the scene's order.
-    pub(super) light: usize,
-    rng: Rng,
-    origin: Vec3,
-    pub(super) direction: Vec3,
-    flux: Vec3,
-}
-
-impl<'w> Emitter<'w> {
-    /// A pass's emitter: caustic photons aimed at the targets, through the world's caustic
-    /// guide where it has one.
-    fn new(world: &'w World, kind: MapKind, seed: u64) -> Option<Self> {
-        let targets = world.caustic_targets.as_slice();
-        match kind {
-            MapKind::Caustic => Self::with(world, targets, Stream::CausticPhotons, seed, true),
-            MapKind::Global { .. } => Self::with(world, &[], Stream::GlobalPhotons, seed, false),
-        }
-    }
-
-    /// The caustic guide's pilot paths: aimed, never guided, on their own stream.
-    pub(super) fn pilots(world: &'w World, seed: u64) -> Option<Self> {
-        let targets = world.caustic_targets.as_slice();
-        Self::with(world, targets, Stream::CausticPilots, seed, false)
-    }
-
-    /// Paths from `stream`, aimed at `aim` (none: unaimed), through the world's caustic guide
-    /// when `guided`.
-    fn with(
-        world: &'w World,
-        aim: &[BoundingSphere],
-        stream: Stream,
-        seed: u64,
-        guided: bool,
-    ) -> Option<Self> {
-        let lights = (world.light_sources.iter().enumerate())
-            .map(|(l, light)| {
-                let mut emitter = LightEmitter::new(light, aim);
-                if let (true, Some(cells)) = (guided, world.caustic_guide.get(l).cloned().flatten())
-                {
-                    emitter.guide(cells);
-                }
-                emitter
-            })
-            .collect();
-        Some(Self {
-            world,
-            chooser: LightChooser::new(world)?,
-            lights,
-            streams: StreamSeed::new(seed, stream),
-            ray_epsilon: world.ray_epsilon(),
-        })
-    }
-
-    /// Light `l`'s emitter.
-    pub(super) fn light(&self, l: usize) -> &LightEmitter {
-        &self.lights[l]
-    }
-
-    /// Path `index`: its generator (for the rest of the path) and first ray, or `None` when it
-    /// carries no flux and so casts no ray.
-    #[inline(always)]
-    pub(super) fn start(&self, index: u64) -> Option<PathStart> {
-        let mut rng = self.streams.rng(index);
-        let l = self.chooser.pick(rng.next_f32());
-        let Emission {
-            origin,
-            direction,
-            flux,
-        } = self.lights[l].emit(&mut rng);
-        let flux = flux / self.chooser.pdf[l];
-        (flux.max_element() > 0.0).then(|| PathStart {
-            light: l,
-            rng,
-            // Just off the light: the first ray would otherwise hit the light's own surface.
-            origin: origin + direction * self.ray_epsilon,
-            direction,
-            flux,
-        })
-    }
-}
 
 /// The first ray (origin, unit direction) of each path in `paths`, drawn exactly as
 /// [`trace_photons`] draws it (same lights, same aim, same random numbers), for timing Embree
@@ -214,10 +73,13 @@ pub fn trace_map(
     seed: u64,
     progress: &ProgressBar,
 ) -> (PhotonMap, TraceCounts) {
-    trace_map_within(world, kind, target, None, seed, progress)
+    let (map, _, counts) = trace_map_within(world, kind, target, None, seed, progress);
+    (map, counts)
 }
 
-/// [`trace_map`] emitting at most `max_paths` paths when given (the map is left short).
+/// [`trace_map`] emitting at most `max_paths` paths when given (the map is left short), with
+/// the volume photons the paths left in media (counted in the target with the rest), their
+/// power divided by the paths emitted.
 pub fn trace_map_within(
     world: &World,
     kind: MapKind,
@@ -225,86 +87,15 @@ pub fn trace_map_within(
     max_paths: Option<u64>,
     seed: u64,
     progress: &ProgressBar,
-) -> (PhotonMap, TraceCounts) {
-    let traced = trace_photons(world, kind, target, max_paths, seed, progress);
+) -> (PhotonMap, Vec<VolumePhoton>, TraceCounts) {
+    let mut traced = trace_photons(world, kind, target, max_paths, seed, progress);
     if traced.interrupted {
         // Not worth building: the caller discards it.
-        return (PhotonMap::default(), traced.counts);
+        return (PhotonMap::default(), Vec::new(), traced.counts);
     }
     let counts = traced.counts;
-    (traced.into_map(), counts)
-}
-
-/// The photons of one pass, before any kd-tree is built: in path index order, as traced, with
-/// the flux not yet divided by the number of paths emitted. Their power is encoded where the map
-/// orders them ([`TracedPhotons::into_map`]): one pass over the photons, not two.
-pub struct TracedPhotons {
-    /// Runs of consecutive paths' photons, in order.
-    chunks: Vec<Vec<TracedPhoton>>,
-    len: usize,
-    pub counts: TraceCounts,
-    /// Closest-hit rays cast, counting the paths traced past the target too.
-    pub rays: u64,
-    /// An interruption was requested: there are no photons, and the pass must be discarded.
-    pub interrupted: bool,
-}
-
-impl TracedPhotons {
-    fn new(chunks: Vec<Vec<TracedPhoton>>, counts: TraceCounts, rays: u64) -> Self {
-        Self {
-            len: chunks.iter().map(Vec::len).sum(),
-            chunks,
-            counts,
-            rays,
-            interrupted: false,
-        }
-    }
-
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    fn flux_scale(&self) -> f32 {
-        1.0 / self.counts.emitted.max(1) as f32
-    }
-
-    /// The stored photons, in path order.
-    pub fn photons(&self) -> Vec<Photon> {
-        let scale = self.flux_scale();
-        (self.chunks.iter().flatten())
-            .map(|p| p.record(scale))
-            .collect()
-    }
-
-    /// The photon map of these photons: the same map as [`PhotonMap::build`] of
-    /// [`TracedPhotons::photons`]. Each chunk is encoded (in parallel) into positions and
-    /// attributes and freed before the kd-tree is built, so the 32-byte traced photons are gone
-    /// by the time the tree and the map's attributes take their memory.
-    pub fn into_map(self) -> PhotonMap {
-        let scale = self.flux_scale();
-        let emitted = self.counts.emitted;
-        let encoded: Vec<(Vec<Vec3>, Vec<PhotonAttributes>)> = (self.chunks.into_par_iter())
-            .map(|chunk| {
-                let encoded = chunk
-                    .iter()
-                    .map(|p| (p.position, p.record(scale).attributes()))
-                    .unzip();
-                drop(chunk);
-                encoded
-            })
-            .collect();
-        let mut positions = Vec::with_capacity(self.len);
-        let mut attributes = Vec::with_capacity(self.len);
-        for (p, a) in encoded {
-            positions.extend_from_slice(&p);
-            attributes.extend_from_slice(&a);
-        }
-        PhotonMap::from_sources(positions, |i| attributes[i], emitted)
-    }
+    let volume = traced.take_volume();
+    (traced.into_map(), volume, counts)
 }
 
 /// What one rayon task traced: a run of consecutive paths.
@@ -401,7 +192,8 @@ pub fn trace_photons(
             } else {
                 // The pass ends at the path that stores the last photon wanted.
                 chunk.photons.truncate(room);
-                emitted = chunk.start + u64::from(chunk.photons[room - 1].path_in_chunk) + 1;
+                emitted =
+                    chunk.start + u64::from(chunk.photons[room - 1].path_in_chunk & !IN_VOLUME) + 1;
             }
             stored += chunk.photons.len();
             kept.push(chunk.photons);
@@ -503,14 +295,16 @@ pub fn path_rays(
 
 /// A path on its way: its next ray and what it carries.
 pub(super) struct LivePath {
-    path_in_chunk: u32,
+    pub(super) path_in_chunk: u32,
     pub(super) rng: Rng,
-    origin: Vec3,
-    direction: Vec3,
+    pub(super) origin: Vec3,
+    pub(super) direction: Vec3,
     pub(super) flux: Vec3,
-    bounces: u32,
+    pub(super) bounces: u32,
     pub(super) specular_seen: bool,
+    /// Whether the path has bounced off a diffuse surface or scattered in a medium.
     pub(super) diffuse_seen: bool,
+    pub(super) medium: Option<MediumId>,
 }
 
 impl LivePath {
@@ -524,6 +318,7 @@ impl LivePath {
             bounces: 0,
             specular_seen: false,
             diffuse_seen: false,
+            medium: start.medium,
         }
     }
 }
@@ -542,6 +337,25 @@ pub(super) fn trace_path(
         rays += 1;
         log.cast(path.origin, path.direction);
         let hit = world.closest_hit(path.origin, path.direction, 0.0, f32::INFINITY);
+        if let Some(media) = &world.media {
+            let t_max = hit.as_ref().map_or(f32::INFINITY, ClosestHit::t);
+            let ray = (path.origin, path.direction);
+            match media.free_flight(ray, t_max, path.medium, &mut path.rng) {
+                Flight::Scattered { t, medium, weight } => {
+                    if !scatter_in_medium(world, kind, &mut path, t, medium, weight, stored) {
+                        return rays;
+                    }
+                    continue;
+                }
+                Flight::Passed { weight, medium } => {
+                    path.flux *= weight;
+                    path.medium = medium;
+                    if path.flux.max_element() <= 0.0 {
+                        return rays;
+                    }
+                }
+            }
+        }
         if !advance(world, kind, &mut path, hit, stored) {
             return rays;
         }
@@ -641,6 +455,10 @@ fn advance(
         return false;
     }
     path.bounces += 1;
+    if let Some(media) = &world.media {
+        let normal = hit.geometric_normal;
+        path.medium = media.after_surface(hit.geometry, hit.instance, normal, next, path.medium);
+    }
     // Leave the surface on the side the new direction points to.
     let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
     path.origin = world.offset_from(&hit, side);
@@ -651,7 +469,7 @@ fn advance(
 /// Surfaces a path may meet: the tracer's own limit, or fewer where the scene caps paths
 /// (a photon stored on its k-th surface has met k − 1 before it).
 #[inline(always)]
-fn bounce_limit(world: &World) -> u32 {
+pub(super) fn bounce_limit(world: &World) -> u32 {
     match world.description.transport.photon_bounces() {
         Some(cap) => MAX_BOUNCES.min(cap + 1),
         None => MAX_BOUNCES,

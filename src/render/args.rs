@@ -295,6 +295,12 @@ pub struct RenderArgs {
           help_heading = headings::EYE, hide_short_help = true)]
     pub global_k: usize,
 
+    /// Neighbours that set each volume photon's radius in the beam radiance estimate (scenes
+    /// with participating media).
+    #[arg(long, value_name = "K", default_value_t = DEFAULT_VOLUME_K, allow_negative_numbers = true,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub volume_k: usize,
+
     /// With final gathering, precompute irradiance at one global photon in N (0: no tables).
     ///
     /// Christensen's precomputed irradiance: once per pass at one photon in N of the global
@@ -415,6 +421,9 @@ pub const DEFAULT_CAUSTIC_PHOTONS_MAX: u64 = 300_000;
 pub const DEFAULT_CAUSTIC_GROWTH_FROM: u64 = 8;
 /// Stored global photons per pass by default (scenes with two or more diffuse objects).
 pub const DEFAULT_GLOBAL_PHOTONS: usize = 300_000;
+
+/// `--volume-k`: measured on pbrt's cloud scene, where 100 blurred its silhouette.
+pub const DEFAULT_VOLUME_K: usize = 30;
 /// Stored global photons per pass by default in a scene whose one diffuse object sees itself
 /// through mirrors and glass alone (BENCHMARKS.md, "caustic-glass against pbrt-v3").
 pub const DEFAULT_LONE_GLOBAL_PHOTONS: usize = 10_000;

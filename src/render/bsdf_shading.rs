@@ -14,6 +14,7 @@ use super::integrator::{Emission, Integrator, Radiance};
 use crate::bsdf::{Bsdf, Model, Part};
 use crate::estimate::{Query, Scratch};
 use crate::sampling::{Frame, PathSampler};
+use crate::scene::MediumId;
 use crate::world::{Interaction, Surface};
 use glam::Vec3;
 
@@ -42,6 +43,8 @@ struct At<'h> {
     /// The geometric and shading normals facing the ray.
     ng: Vec3,
     ns: Vec3,
+    /// The medium the ray arrived in.
+    medium: Option<MediumId>,
 }
 
 /// Which sampled parts of a BSDF direct light is weighed against.
@@ -57,7 +60,7 @@ impl Integrator<'_> {
         &self,
         hit: &Interaction,
         model: &Model,
-        dir: Vec3,
+        (dir, medium): (Vec3, Option<MediumId>),
         depth: u32,
         emission: Emission,
         sampler: &mut PathSampler,
@@ -83,6 +86,7 @@ impl Integrator<'_> {
             back,
             ng,
             ns,
+            medium,
         };
         let diffuse_hit = sampler.next_diffuse_hit();
         let deeper = depth < self.max_depth;
@@ -106,7 +110,7 @@ impl Integrator<'_> {
                 let broad = Reception::of(&bsdf, Part::Broad, frame, wo);
                 out.indirect = self.indirect(
                     &broad,
-                    at.p,
+                    (at.p, self.medium_after(hit, ng, medium)),
                     (ng, ns, -dir),
                     diffuse_hit,
                     depth,
@@ -181,8 +185,9 @@ impl Integrator<'_> {
         }
         let next = at.frame.to_world(s.wi);
         let origin = self.world.spawn_from(at.hit, at.ng, next);
+        let medium = self.medium_after(at.hit, next, at.medium);
         if s.delta {
-            return weight * self.trace(origin, next, depth + 1, along, sampler, scratch);
+            return weight * self.trace(origin, next, medium, depth + 1, along, sampler, scratch);
         }
         // Shadow rays sample the far side only through a lobe that spreads transmitted light;
         // elsewhere light through a transmitting lobe is this sample's alone.
@@ -228,7 +233,11 @@ impl Integrator<'_> {
             // pbrt's direct lighting: a glossy lobe sees lights, not what they light.
             return Radiance::default();
         }
-        weight * self.shade(&found, next, depth + 1, after, sampler, scratch)
+        if self.world.media.is_some() {
+            // Through media the sample goes on as a camera ray does.
+            return weight * self.trace(origin, next, medium, depth + 1, after, sampler, scratch);
+        }
+        weight * self.shade(&found, next, None, depth + 1, after, sampler, scratch)
     }
 
     /// Shadow rays a light takes at each hit.
@@ -261,7 +270,7 @@ impl Integrator<'_> {
             for j in 0..count {
                 let u = sampler.light_2d(diffuse_hit, l, j, count);
                 if let Some(back) = at.back {
-                    sum += self.through_back(at, bsdf, sampled, light, back, count, u);
+                    sum += self.through_back(at, bsdf, sampled, light, back, (count, u), sampler);
                 }
                 let Some(s) = light.sample_incident(p, n, u) else {
                     continue;
@@ -289,8 +298,10 @@ impl Integrator<'_> {
                     continue;
                 }
                 let tfar = s.distance * (1.0 - 1e-4);
-                if !self.world.occluded(p, s.direction, 0.0, tfar) {
-                    sum += f * s.irradiance * wi.z.abs();
+                let medium = self.medium_after(at.hit, s.direction, at.medium);
+                let seen = self.visibility(p, s.direction, tfar, medium, sampler);
+                if seen != Vec3::ZERO {
+                    sum += f * s.irradiance * wi.z.abs() * seen;
                 }
             }
             radiance += sum / count as f32;
@@ -309,8 +320,8 @@ impl Integrator<'_> {
         sampled: Sampled,
         light: &crate::world::lights::LightSource,
         back: Vec3,
-        count: u32,
-        u: (f32, f32),
+        (count, u): (u32, (f32, f32)),
+        sampler: &mut PathSampler,
     ) -> Vec3 {
         let Some(s) = light.sample_incident(back, -at.ns, u) else {
             return Vec3::ZERO;
@@ -327,9 +338,11 @@ impl Integrator<'_> {
             return Vec3::ZERO;
         }
         let tfar = s.distance * (1.0 - 1e-4);
-        if self.world.occluded(back, s.direction, 0.0, tfar) {
+        let medium = self.medium_after(at.hit, s.direction, at.medium);
+        let seen = self.visibility(back, s.direction, tfar, medium, sampler);
+        if seen == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        f * s.irradiance * wi.z.abs()
+        f * s.irradiance * wi.z.abs() * seen
     }
 }

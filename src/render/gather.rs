@@ -13,6 +13,7 @@ use crate::bsdf::{Bsdf, Part};
 use crate::estimate::{PrecomputedIrradiance, Query, Receiver, Scratch, THICK_GATHER};
 use crate::sampling::{Frame, PathSampler, Rng, cosine_hemisphere};
 use crate::scene::Material;
+use crate::scene::MediumId;
 use crate::world::Surface;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -101,7 +102,7 @@ impl Integrator<'_> {
     pub(super) fn indirect(
         &self,
         reception: &Reception,
-        p: Vec3,
+        (p, medium): (Vec3, Option<MediumId>),
         (ng, n, wo): (Vec3, Vec3, Vec3),
         at: u32,
         depth: u32,
@@ -129,7 +130,7 @@ impl Integrator<'_> {
                 let (e, thickness) = estimate.irradiance_and_thickness(map, query, scratch);
                 if thickness > THICK_GATHER && depth < CLUTTER_DEPTH {
                     return *reflectance
-                        * self.traced_on(p, (ng, n, wo), at, depth, sampler, scratch);
+                        * self.traced_on((p, medium), (ng, n, wo), at, depth, sampler, scratch);
                 }
                 *reflectance * (e * FRAC_1_PI)
             }
@@ -196,7 +197,7 @@ impl Integrator<'_> {
     /// buddha-fractal's floor's does, gathers from the viewer's half of the sky only).
     fn traced_on(
         &self,
-        p: Vec3,
+        (p, medium): (Vec3, Option<MediumId>),
         (ng, n, wo): (Vec3, Vec3, Vec3),
         at: u32,
         depth: u32,
@@ -208,7 +209,15 @@ impl Integrator<'_> {
         if d.dot(ng) <= 0.0 {
             return Vec3::ZERO;
         }
-        let next = self.trace(p, d, depth + 1, Emission::Elsewhere, sampler, scratch);
+        let next = self.trace(
+            p,
+            d,
+            medium,
+            depth + 1,
+            Emission::Elsewhere,
+            sampler,
+            scratch,
+        );
         next.total()
     }
 

@@ -7,6 +7,7 @@
 //! [`PathSampler`]. Owns shading; must not build maps or write images.
 
 use super::gather::Reception;
+use super::volume_shading::VolumeMaps;
 use crate::bsdf::Part;
 use crate::estimate::precomputed::ShownIrradiance;
 use crate::estimate::{KnnEstimate, PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
@@ -14,6 +15,7 @@ use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
 use crate::sampling::{Frame, PathSampler};
 use crate::scene::Material;
+use crate::scene::MediumId;
 use crate::world::{Interaction, SHADING_AGREEMENT_MIN_COS, Surface, World};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -118,6 +120,8 @@ pub struct Integrator<'a> {
     /// Glass hits at depth below this follow both rays; deeper ones follow one, chosen with
     /// the Fresnel reflectance as probability (the same expectation, fewer rays).
     pub glass_split_depth: u32,
+    /// The volume photon maps read along camera segments in media (none without media).
+    pub volume: VolumeMaps<'a>,
 }
 
 /// Whether a camera path counts the light it sees along its specular chain itself: the
@@ -158,32 +162,61 @@ impl Integrator<'_> {
         sampler: &mut PathSampler,
         scratch: &mut Scratch,
     ) -> Radiance {
-        self.trace(origin, dir, depth, Emission::Counted, sampler, scratch)
+        let medium = self.world.media.as_ref().and_then(|m| m.camera());
+        self.trace(
+            origin,
+            dir,
+            medium,
+            depth,
+            Emission::Counted,
+            sampler,
+            scratch,
+        )
     }
 
-    /// [`Integrator::radiance`], counting the emitters and environment seen along the
-    /// specular chain or not.
+    /// [`Integrator::radiance`] from a ray in `medium`, counting the emitters and
+    /// environment seen along the specular chain or not.
+    #[allow(clippy::too_many_arguments)]
     pub fn trace(
         &self,
         origin: Vec3,
         dir: Vec3,
+        medium: Option<MediumId>,
         depth: u32,
         emission: Emission,
         sampler: &mut PathSampler,
         scratch: &mut Scratch,
     ) -> Radiance {
         let counted = |e: Vec3| emission.counted(e);
-        let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
-            return counted(self.world.background(dir));
+        let hit = self.world.intersect(origin, dir, 0.0, f32::INFINITY);
+        if self.world.media.is_none() {
+            let Some(hit) = hit else {
+                return counted(self.world.background(dir));
+            };
+            return self.shade(&hit, dir, None, depth, emission, sampler, scratch);
+        }
+        let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+        let through = self.through_media(origin, dir, t_max, medium, depth, sampler, scratch);
+        if through.transmittance == Vec3::ZERO {
+            return through.in_scattered;
+        }
+        let seen = match hit {
+            None => counted(self.world.background(dir)),
+            Some(hit) => {
+                let medium = through.medium_at_end;
+                self.shade(&hit, dir, medium, depth, emission, sampler, scratch)
+            }
         };
-        self.shade(&hit, dir, depth, emission, sampler, scratch)
+        through.in_scattered + through.transmittance * seen
     }
 
-    /// Radiance leaving `hit` back along the ray `dir` that found it.
+    /// Radiance leaving `hit` back along the ray `dir` that found it in `medium`.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn shade(
         &self,
         hit: &Interaction,
         dir: Vec3,
+        medium: Option<MediumId>,
         depth: u32,
         emission: Emission,
         sampler: &mut PathSampler,
@@ -205,7 +238,7 @@ impl Integrator<'_> {
         let (ng, ns) = hit.facing(dir);
         match &self.world.material_at(m, hit) {
             Material::Bsdf(model) => {
-                self.shade_bsdf(hit, model, dir, depth, emission, sampler, scratch)
+                self.shade_bsdf(hit, model, (dir, medium), depth, emission, sampler, scratch)
             }
             Material::Diffuse { albedo } => {
                 let p = self.world.offset_from(hit, ng);
@@ -216,7 +249,8 @@ impl Integrator<'_> {
                 let brdf = *albedo * FRAC_1_PI;
                 let at = sampler.next_diffuse_hit();
                 let reception = Reception::Lambert(*albedo);
-                let direct = brdf * self.direct(p, ng, ns, at, sampler);
+                let seen_from = self.medium_after(hit, ng, medium);
+                let direct = brdf * self.direct(p, (ng, ns), seen_from, at, sampler);
                 if !transport.reads_photons(depth) {
                     return Radiance {
                         direct,
@@ -228,7 +262,7 @@ impl Integrator<'_> {
                     caustic: self.caustic(&reception, &query, scratch),
                     indirect: self.indirect(
                         &reception,
-                        p,
+                        (p, seen_from),
                         (ng, ns, -dir),
                         at,
                         depth,
@@ -244,6 +278,7 @@ impl Integrator<'_> {
                     * self.trace(
                         self.world.spawn_from(hit, ng, r),
                         r,
+                        self.medium_after(hit, r, medium),
                         depth + 1,
                         emission,
                         sampler,
@@ -271,6 +306,7 @@ impl Integrator<'_> {
                         * self.trace(
                             self.world.spawn_from(hit, ng, next),
                             next,
+                            self.medium_after(hit, next, medium),
                             depth + 1,
                             emission,
                             sampler,
@@ -281,6 +317,7 @@ impl Integrator<'_> {
                     * self.trace(
                         self.world.spawn_from(hit, ng, r),
                         r,
+                        self.medium_after(hit, r, medium),
                         depth + 1,
                         emission,
                         sampler,
@@ -291,6 +328,7 @@ impl Integrator<'_> {
                         * self.trace(
                             self.world.spawn_from(hit, ng, t),
                             t,
+                            self.medium_after(hit, t, medium),
                             depth + 1,
                             emission,
                             sampler,
@@ -312,8 +350,15 @@ impl Integrator<'_> {
     /// smaller than itself.
     pub fn emitted(&self, mut origin: Vec3, mut dir: Vec3, rng: &mut crate::sampling::Rng) -> Vec3 {
         let mut throughput = Vec3::ONE;
+        let mut medium = self.world.media.as_ref().and_then(|m| m.camera());
         for _ in 0..=self.max_depth {
-            let Some(hit) = self.world.intersect(origin, dir, 0.0, f32::INFINITY) else {
+            let hit = self.world.intersect(origin, dir, 0.0, f32::INFINITY);
+            if let Some(media) = &self.world.media {
+                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                throughput *= media.transmittance((origin, dir), t_max, medium, rng);
+                medium = media.medium_at(origin, dir, t_max, medium);
+            }
+            let Some(hit) = hit else {
                 return throughput * self.world.background(dir);
             };
             let m = match hit.surface {
@@ -330,6 +375,7 @@ impl Integrator<'_> {
                 return Vec3::ZERO;
             };
             throughput *= tint;
+            medium = self.medium_after(&hit, next, medium);
             origin = self.world.spawn_from(&hit, ng, next);
             dir = next;
         }
@@ -356,11 +402,17 @@ impl Integrator<'_> {
         let mut throughput = Vec3::ONE;
         let mut forced = along.map(super::light_images::chain_choices);
         let bounces = forced.as_ref().map_or(self.max_depth, |c| c.len() as u32);
+        let mut medium = self.world.media.as_ref().and_then(|m| m.camera());
         for bounce in 0..=bounces {
             // A forced chain sees only what its last ray meets: a shorter chain is another
             // chain, which the forced strategy never samples.
             let early = forced.is_some() && bounce < bounces;
             let hit = self.world.intersect(origin, dir, 0.0, f32::INFINITY);
+            if let Some(media) = &self.world.media {
+                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                throughput *= media.transmittance((origin, dir), t_max, medium, rng);
+                medium = media.medium_at(origin, dir, t_max, medium);
+            }
             if early
                 && hit
                     .as_ref()
@@ -420,6 +472,7 @@ impl Integrator<'_> {
                 };
             }
             throughput *= tint;
+            medium = self.medium_after(&hit, next, medium);
             origin = self.world.spawn_from(&hit, ng, next);
             dir = next;
         }
@@ -432,7 +485,14 @@ impl Integrator<'_> {
     /// nothing to stratify. As pbrt reflects light: from the side of the geometric normal
     /// `ng` the path came from, weighed by the cosine to the shading normal `ns` (a shading
     /// normal tilted far from the face, even lying in it, still sees that side's light).
-    fn direct(&self, p: Vec3, ng: Vec3, ns: Vec3, at: u32, sampler: &mut PathSampler) -> Vec3 {
+    fn direct(
+        &self,
+        p: Vec3,
+        (ng, ns): (Vec3, Vec3),
+        medium: Option<MediumId>,
+        at: u32,
+        sampler: &mut PathSampler,
+    ) -> Vec3 {
         let mut e = Vec3::ZERO;
         for (l, light) in self.world.light_sources.iter().enumerate() {
             let count = if light.is_delta() {
@@ -457,8 +517,9 @@ impl Integrator<'_> {
                 let cos = ns.dot(s.direction).abs();
                 // Stop short of the light's own surface.
                 let tfar = s.distance * (1.0 - 1e-4);
-                if !self.world.occluded(p, s.direction, 0.0, tfar) {
-                    sum += s.irradiance * cos;
+                let seen = self.visibility(p, s.direction, tfar, medium, sampler);
+                if seen != Vec3::ZERO {
+                    sum += s.irradiance * cos * seen;
                 }
             }
             e += sum / count as f32;

@@ -34,6 +34,7 @@ pub mod pipeline;
 pub mod schedule;
 pub mod setup;
 pub mod tensor_history;
+pub mod volume_shading;
 
 pub use camera::{PassSamples, RayCamera};
 pub use film::{Film, PassImage};

@@ -27,6 +27,7 @@ use super::kernel_probe::KernelProbe;
 use super::light_images::Aim;
 use super::pilots::PixelPlan;
 use super::schedule::{PhotonGrowth, Schedule, pass_estimator};
+use super::volume_shading::VolumeMaps;
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::diffusion::shaped::ShapedBy;
 use crate::estimate::kernel::RadialKernel;
@@ -39,6 +40,7 @@ use crate::estimate::{
 };
 use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, TraceCounts, trace_map_within};
+use crate::photon::volume::{VolumeMap, VolumePhoton};
 use crate::sampling::PathSampler;
 use crate::scene::Transport;
 use crate::timing::{PhaseTimes, progress};
@@ -65,6 +67,13 @@ pub struct RenderSettings {
     /// Final-gather rays per diffuse eye hit (0: the global map shown directly).
     pub final_gather: u32,
     pub global_k: usize,
+    /// Neighbours that set a volume photon's radius. Left out of the file at its default,
+    /// so films of scenes without media keep their bytes.
+    #[serde(
+        default = "default_volume_k",
+        skip_serializing_if = "is_default_volume_k"
+    )]
+    pub volume_k: usize,
     /// Irradiance precomputed at every n-th global photon for final gathering (0: a k-NN
     /// estimate per gather ray).
     pub irradiance_stride: usize,
@@ -107,6 +116,14 @@ pub struct RenderSettings {
     /// when dpm's own, so films that had no cap keep their bytes.
     #[serde(default, skip_serializing_if = "Transport::is_full")]
     pub transport: Transport,
+}
+
+fn default_volume_k() -> usize {
+    super::args::DEFAULT_VOLUME_K
+}
+
+fn is_default_volume_k(k: &usize) -> bool {
+    *k == super::args::DEFAULT_VOLUME_K
 }
 
 fn no_growth() -> PhotonGrowth {
@@ -175,11 +192,25 @@ pub fn global_estimate(
     KnnEstimate::new(RadialKernel::Constant, settings.global_k, cap)
 }
 
+/// The largest radius a volume photon takes, relative to the size of the media (the scene's
+/// where they are not bounded): a lone photon in an empty stretch of fog would otherwise
+/// spread over the whole scene.
+const VOLUME_MAX_RADIUS: f32 = 0.05;
+
 /// One pass's photon maps, with what tracing them took.
 #[derive(Default)]
 pub struct PassMaps {
     pub caustic: Option<(PhotonMap, TraceCounts)>,
     pub global: Option<(PhotonMap, TraceCounts)>,
+    /// The photons the caustic and global paths left in media (empty without media).
+    pub volume: VolumePhotons,
+}
+
+/// A pass's volume photons, before their maps are built.
+#[derive(Default)]
+pub struct VolumePhotons {
+    pub caustic: Vec<VolumePhoton>,
+    pub global: Vec<VolumePhoton>,
 }
 
 /// The maps a render with `settings` traces in a scene.
@@ -188,7 +219,9 @@ pub fn wanted_maps(settings: &RenderSettings, world: &World) -> Vec<crate::photo
     let mut wanted = Vec::new();
     // Without a diffuse surface no caustic photon is ever stored: tracing would only run
     // to its path limit.
-    if world.has_specular() && world.has_diffuse() && settings.caustic_photons > 0 {
+    // A medium keeps caustic photons too (a volumetric caustic).
+    let receives = world.has_diffuse() || world.media.is_some();
+    if world.has_specular() && receives && settings.caustic_photons > 0 {
         wanted.push(MapInfo {
             kind: MapKind::Caustic,
             target: settings.caustic_photons as u64,
@@ -238,8 +271,12 @@ pub fn trace_pass_maps(
             MapKind::Global { .. } if settings.global_paths > 0 => Some(settings.global_paths),
             _ => None,
         };
-        let (map, counts) =
+        let (map, volume, counts) =
             trace_map_within(world, info.kind, target as usize, max_paths, seed, &bar);
+        match info.kind {
+            MapKind::Caustic => maps.volume.caustic = volume,
+            MapKind::Global { .. } => maps.volume.global = volume,
+        }
         bar.finish_and_clear();
         times.accumulate(
             &format!("trace {what}"),
@@ -311,7 +348,9 @@ impl PassContext<'_> {
         let PassMaps {
             mut caustic,
             global,
+            volume,
         } = maps;
+        let volume = self.volume_maps(volume, pass, times);
         let mut estimator = None;
         let mut diffusion = None;
         // The diffusion kernels' shapes come from the earlier passes' photons when there are
@@ -407,6 +446,10 @@ impl PassContext<'_> {
             max_depth: self.settings.max_depth,
             light_samples: self.settings.light_samples,
             glass_split_depth: self.settings.glass_split_depth,
+            volume: VolumeMaps {
+                caustic: volume.0.as_ref(),
+                global: volume.1.as_ref(),
+            },
         };
         let probe = match (&caustic, &diffusion) {
             (Some((map, _)), Some(d)) if self.kernel_field => Some(KernelProbe {
@@ -450,6 +493,34 @@ impl PassContext<'_> {
             estimator,
             caustic_bytes_per_photon: caustic.as_ref().map(|(m, _)| m.bytes_per_photon()),
         }))
+    }
+
+    /// The pass's volume photon maps (caustic, global), each photon's radius its
+    /// `--volume-k` nearest neighbours' times the pass's radius scale, so that the beam
+    /// estimate's 2-D kernels shrink at the rate the surface estimates' do.
+    fn volume_maps(
+        &self,
+        photons: VolumePhotons,
+        pass: u64,
+        times: &mut PhaseTimes,
+    ) -> (Option<VolumeMap>, Option<VolumeMap>) {
+        if photons.caustic.is_empty() && photons.global.is_empty() {
+            return (None, None);
+        }
+        let start = Instant::now();
+        let count = (photons.caustic.len() + photons.global.len()) as u64;
+        let k = self.settings.volume_k;
+        // Relative to the media's own size where they are bounded (a cloud under a wide sky).
+        let media = self.world.media.as_ref();
+        let reach = (media.and_then(|m| m.bounds())).map_or(self.world.scale, |b| 2.0 * b.radius);
+        let max_radius = VOLUME_MAX_RADIUS * reach;
+        let scale = self.schedule.radius_scale(pass);
+        let build = |photons: Vec<VolumePhoton>| {
+            (!photons.is_empty()).then(|| VolumeMap::build(photons, k, max_radius, scale))
+        };
+        let maps = (build(photons.caustic), build(photons.global));
+        times.accumulate("volume maps", start.elapsed(), &[("photons", count)]);
+        maps
     }
 
     /// The irradiance tables of the pass's global map, if it is read through one (none with
@@ -532,6 +603,7 @@ pub fn shade_pass(
         glass_split_depth: integrator.glass_split_depth.min(EDGE_GLASS_SPLIT_DEPTH),
         ..*integrator
     };
+    let camera_medium = (integrator.world.media.as_ref()).and_then(|m| m.camera());
     image
         .values
         .par_chunks_mut(w * channels)
@@ -569,6 +641,7 @@ pub fn shade_pass(
                     sum += integrator.trace(
                         ray.origin,
                         ray.direction,
+                        camera_medium,
                         0,
                         counted,
                         &mut sampler,

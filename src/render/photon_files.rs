@@ -35,6 +35,8 @@ pub(super) fn load_maps(
         global: file
             .take(MapKind::Global { with_direct: false })
             .map(with_counts),
+        // Photon files hold surface maps only: a scene with media is refused by `check_fits`.
+        volume: Default::default(),
     };
     let stored = |m: &Option<(PhotonMap, TraceCounts)>| m.as_ref().map_or(0, |(_, c)| c.stored);
     times.record(

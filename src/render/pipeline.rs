@@ -136,6 +136,9 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
         }
         ImageFormat::from_path(path)?;
     }
+    if args.volume_k < 1 {
+        return invalid(format!("--volume-k {}: must be at least 1", args.volume_k));
+    }
     if args.global_k < 2 {
         return invalid(format!("--global-k {}: must be at least 2", args.global_k));
     }
@@ -242,6 +245,13 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     let run_start = Instant::now();
     let mut times = PhaseTimes::new();
     let (mut world, scene_hash) = load_world(args, &mut times)?;
+    if world.media.is_some() && (args.save_photons.is_some() || args.load_photons.is_some()) {
+        return Err(RenderError::Invalid(
+            "--save-photons and --load-photons hold surface photon maps, and this scene has \
+             participating media (whose volume photons they would lose)"
+                .into(),
+        ));
+    }
     let wiring = Wiring::new(args, &mut world, scene_hash, &output, &mut times)?;
     let camera = &world.description.camera;
     let reference = match &args.reference {

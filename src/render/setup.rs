@@ -234,7 +234,7 @@ fn drop_an_empty_lone_global_map(
     };
     let paths = (settings.global_paths > 0).then_some(settings.global_paths);
     let bar = indicatif::ProgressBar::hidden();
-    let (_, counts) = crate::photon::tracer::trace_map_within(
+    let (_, _, counts) = crate::photon::tracer::trace_map_within(
         world,
         kind,
         settings.global_photons,
@@ -262,7 +262,9 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         caustic_photons: args.caustic_photons,
         // Diffuse light bounces between two diffuse objects, or from one back to itself
         // through its mirrors and glass; a lone plane cannot light itself.
+        // A medium scatters light many times over: its volume photons are the global map's.
         global_photons: args.global_photons.unwrap_or(match diffuse_objects {
+            _ if world.media.is_some() => DEFAULT_GLOBAL_PHOTONS,
             0 => 0,
             1 if lone => DEFAULT_LONE_GLOBAL_PHOTONS,
             1 => 0,
@@ -278,6 +280,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
             .map_or(args.max_depth, |cap| args.max_depth.min(cap)),
         final_gather: args.final_gather,
         global_k: args.global_k,
+        volume_k: args.volume_k,
         irradiance_stride: args.irradiance_stride,
         light_samples: args.light_samples,
         glass_split_depth: args.glass_split_depth,

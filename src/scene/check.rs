@@ -176,8 +176,8 @@ impl CheckReport {
         }
         match &self.scene {
             Some(scene) => {
-                for medium in &scene.media {
-                    let _ = writeln!(s, "note: {} (not rendered yet)", medium.describe());
+                for medium in &scene.media.media {
+                    let _ = writeln!(s, "note: {}", medium.describe());
                 }
                 let _ = writeln!(s, "summary: renders: {}", summary(scene));
             }

@@ -70,3 +70,65 @@ impl Medium {
         )
     }
 }
+
+/// Index of a medium in [`SceneMedia::media`].
+pub type MediumId = u16;
+
+/// The media on the two sides of a surface: `inside` behind its geometric normal (as dpm
+/// orients the shape), `outside` on the side the normal points to; `None` is vacuum.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MediumInterface {
+    pub inside: Option<MediumId>,
+    pub outside: Option<MediumId>,
+}
+
+impl MediumInterface {
+    /// Whether crossing the surface changes the medium (pbrt ignores an interface that does
+    /// not: the ray keeps the medium it had).
+    pub fn is_transition(&self) -> bool {
+        self.inside != self.outside
+    }
+
+    /// The medium a ray is in after crossing the surface along `dir`, `normal` its geometric
+    /// normal: inside when it heads against the normal.
+    pub fn after_crossing(&self, dir: Vec3, normal: Vec3) -> Option<MediumId> {
+        if dir.dot(normal) < 0.0 {
+            self.inside
+        } else {
+            self.outside
+        }
+    }
+}
+
+/// A surface that only bounds media (pbrt's `Material ""`, `"none"`, `"interface"`): rays
+/// cross it without a bounce, changing medium.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MediumBoundary {
+    /// The shape; its material is not read.
+    pub shape: super::Shape,
+    pub interface: MediumInterface,
+}
+
+/// Everything a scene says of participating media: empty in a scene without them, which then
+/// renders exactly as before media existed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneMedia {
+    /// In order of definition.
+    pub media: Vec<Medium>,
+    pub boundaries: Vec<MediumBoundary>,
+    /// Shapes with a material whose two sides hold different media (a glass of fog), by index
+    /// into [`super::SceneDescription::shapes`].
+    pub shape_interfaces: Vec<(usize, MediumInterface)>,
+    /// The medium each light sits in, by index into [`super::SceneDescription::lights`]
+    /// (lights not listed are in vacuum; a light at infinity always is).
+    pub light_media: Vec<(usize, MediumId)>,
+    /// The medium the camera sits in.
+    pub camera: Option<MediumId>,
+}
+
+impl SceneMedia {
+    /// Whether any light travels through a medium.
+    pub fn is_empty(&self) -> bool {
+        self.media.is_empty()
+    }
+}

@@ -35,7 +35,7 @@ mod validate;
 
 pub use curves::{CurveKind, Curves, check_curves};
 pub use environment::{EnvironmentMap, SphereMapping};
-pub use medium::{Medium, MediumKind};
+pub use medium::{Medium, MediumBoundary, MediumId, MediumInterface, MediumKind, SceneMedia};
 pub use rules::{InvalidField, check_light, check_material, check_materials, check_mesh};
 pub use texture::{Cutout, Texture, TexturedMaterial, TexturedParameter};
 pub use transport::{PBRT_DEFAULT_MAX_DEPTH, Transport};
@@ -63,8 +63,8 @@ pub struct SceneDescription {
     pub response: ImageResponse,
     /// How far light is followed: a pbrt `Integrator` line's cap, or dpm's own.
     pub transport: Transport,
-    /// Participating media defined (pbrt's `MakeNamedMedium`), in order; not rendered yet.
-    pub media: Vec<Medium>,
+    /// Participating media, the surfaces that bound them and what sits in them.
+    pub media: SceneMedia,
 }
 
 /// A linear map from the rendered radiance to the written pixel values: a white balance (a
@@ -434,6 +434,16 @@ pub enum Shape {
 }
 
 impl Shape {
+    /// The corners of a box around the shape.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        match self {
+            Shape::Sphere { center, radius, .. } => (*center - *radius, *center + *radius),
+            Shape::Triangles(mesh) => (mesh.positions.iter())
+                .fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p))),
+            Shape::Curves(curves) => curves.bounds(),
+        }
+    }
+
     /// The shape's material: an index into [`SceneDescription::materials`].
     pub fn material(&self) -> u32 {
         match self {
@@ -692,7 +702,7 @@ pub fn parse_with(
         textured_materials,
         response: ImageResponse::default(),
         transport: Transport::Full,
-        media: Vec::new(),
+        media: SceneMedia::default(),
     };
     report
         .warnings

@@ -94,6 +94,7 @@ impl SceneTarget {
             max_depth: MAX_DEPTH,
             light_samples: 1,
             glass_split_depth: u32::MAX,
+            volume: Default::default(),
         };
         // Pass 0's pixel positions for every image: a progressive reference then converges to
         // the image at exactly the points every sweep run samples.

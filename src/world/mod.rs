@@ -11,6 +11,7 @@ mod cutout;
 mod hit_normals;
 mod instancing;
 pub mod lights;
+pub mod participating;
 mod ribbon;
 pub mod texturing;
 
@@ -238,6 +239,8 @@ pub struct World {
     /// By material id, whether it is a mix that reads photons
     /// ([`World::keeps_photon_on_mix`]); empty in a scene without mixes.
     mixes_reading_photons: Vec<bool>,
+    /// The participating media; `None` in a scene without them.
+    pub media: Option<participating::Participating>,
 }
 
 /// [`World::diffuse_bounce_aim`] in a scene whose one diffuse object sees itself only through
@@ -390,6 +393,13 @@ impl World {
             .filter(|l| l.has_directional_sky())
             .cloned()
             .collect();
+        let media = participating::Participating::new(
+            &device,
+            &description.media,
+            &description.shapes,
+            description.lights.len(),
+            LOCAL_EPSILON * 1e-2,
+        )?;
         let texturing = texturing::Texturing::new(&description);
         let materials = &description.materials;
         let mixes_reading_photons =
@@ -424,6 +434,7 @@ impl World {
             sky_maps,
             glossy_min_alpha,
             diffuse_bounce_aim: 0.0,
+            media,
         };
         if world.lights_itself_alone() {
             world.diffuse_bounce_aim = LONE_DIFFUSE_BOUNCE_AIM;

@@ -161,6 +161,7 @@ pub fn whitted(world: &World, max_depth: u32) -> Integrator<'_> {
         max_depth,
         light_samples: 1,
         glass_split_depth: u32::MAX,
+        volume: Default::default(),
     }
 }
 

@@ -21,9 +21,6 @@ use graphics_state::{AttributeTarget, GraphicsState, Pushed};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// How many ignored media directives the one warning about them names.
-const MEDIA_NAMED: usize = 4;
-
 /// A directive with a type and parameters, where it was written.
 #[derive(Debug)]
 pub(super) struct Item {
@@ -42,6 +39,8 @@ pub(super) struct CameraItem {
 pub(super) struct LightItem {
     pub item: Item,
     pub ctm: Mat4,
+    /// The outside medium of the `MediumInterface` in force ("" for none): where it shines.
+    pub medium: String,
 }
 
 /// `MakeNamedMedium`: its name, its parameters (`kind` its "string type") and the transform
@@ -111,6 +110,9 @@ pub(super) struct Parsed {
     /// In the order they are defined.
     pub textures: Vec<TextureItem>,
     pub media: Vec<MediumItem>,
+    /// The outside medium of the `MediumInterface` in force at `Camera` (pbrt-v4's camera
+    /// medium) and at `WorldEnd` or the end of the files (pbrt-v3's).
+    pub camera_medium: (String, String),
     /// Directives read and deliberately not used (Sampler, PixelFilter, ...), for the report.
     pub ignored: Vec<String>,
     pub warnings: Vec<String>,
@@ -150,8 +152,8 @@ pub(super) struct Parser<'f> {
     search_folder: PathBuf,
     /// The files open around the `Import`s being read, for cycle checks.
     importing: Vec<PathBuf>,
-    /// The media directives read and ignored, named in one warning at the end.
-    media: Vec<String>,
+    /// Whether `WorldEnd` was read (pbrt-v3 takes the camera's medium there).
+    world_ended: bool,
     /// The object being defined (between ObjectBegin and ObjectEnd).
     object: Option<usize>,
     named_objects: HashMap<String, usize>,
@@ -170,13 +172,15 @@ pub(super) fn parse(path: &Path, files: &dyn SceneFiles) -> Result<Parsed, PbrtE
         ignore_transforms: false,
         search_folder: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         importing: Vec::new(),
-        media: Vec::new(),
+        world_ended: false,
         object: None,
         named_objects: HashMap::new(),
     };
     let (tokens, identity) = parser.open_file(path, None, None)?;
     parser.run(&mut Cursor::new(tokens, identity))?;
-    parser.warn_about_media();
+    if !parser.world_ended {
+        parser.out.camera_medium.1 = parser.state.media.1.clone();
+    }
     if let Some(Pushed::Attributes(_, at) | Pushed::Transform(_, at)) = parser.stack.last() {
         return Err(at.error("AttributeBegin", "is never closed (no AttributeEnd)"));
     }
@@ -249,6 +253,8 @@ impl Parser<'_> {
                 self.named_frames.insert("world".into(), Mat4::IDENTITY);
             }
             "WorldEnd" => {
+                self.world_ended = true;
+                self.out.camera_medium.1 = self.state.media.1.clone();
                 self.out.dialect.v3.get_or_insert_with(|| format!("{place}: WorldEnd (pbrt-v3 ends the world with it; pbrt-v4 has no WorldEnd)"));
             }
             "Camera" => {
@@ -259,6 +265,7 @@ impl Parser<'_> {
                     return Err(place.error("Camera", "the current transform is not invertible"));
                 }
                 self.named_frames.insert("camera".into(), camera_to_world);
+                self.out.camera_medium.0 = self.state.media.1.clone();
                 self.out.camera = Some(CameraItem {
                     item,
                     camera_to_world,
@@ -375,7 +382,6 @@ impl Parser<'_> {
                             format!("\"{name}\" has no \"string type\""),
                         )
                     })?;
-                self.media_ignored(&place, &format!("MakeNamedMedium \"{name}\""));
                 self.out.media.push(MediumItem {
                     name,
                     item: Item {
@@ -400,8 +406,6 @@ impl Parser<'_> {
                 // One name is both sides.
                 let outside = names.get(1).unwrap_or(&names[0]).clone();
                 self.state.media = (names[0].clone(), outside);
-                let names: Vec<_> = names.iter().map(|n| format!("\"{n}\"")).collect();
-                self.media_ignored(&place, &format!("MediumInterface {}", names.join(" ")));
             }
             "LightSource" => {
                 self.in_world(&place, directive)?;
@@ -409,6 +413,7 @@ impl Parser<'_> {
                 self.out.lights.push(LightItem {
                     item,
                     ctm: self.state.ctm,
+                    medium: self.state.media.1.clone(),
                 });
             }
             "AreaLightSource" => {
@@ -456,25 +461,6 @@ impl Parser<'_> {
             return Err(place.error(directive, "belongs after WorldBegin"));
         }
         Ok(())
-    }
-
-    fn media_ignored(&mut self, place: &Place, what: &str) {
-        self.media.push(format!("{what} ({place})"));
-    }
-
-    /// One warning for every media directive read: dpm has no participating media.
-    fn warn_about_media(&mut self) {
-        let Some(first) = self.media.first() else {
-            return;
-        };
-        let place = first[first.rfind('(').map_or(0, |i| i + 1)..].trim_end_matches(')');
-        let mut named = self.media[..self.media.len().min(MEDIA_NAMED)].join(", ");
-        if self.media.len() > MEDIA_NAMED {
-            named += &format!(" and {} more", self.media.len() - MEDIA_NAMED);
-        }
-        self.out.warnings.push(format!(
-            "{place}: participating media are read but not rendered yet; left out: {named}"
-        ));
     }
 
     fn v4(&mut self, place: &Place, what: &str) {

@@ -96,6 +96,30 @@ impl EnvironmentMapLight {
         (towards, pdf, map.texels[texel])
     }
 
+    /// Light arriving at a point in a medium: half the directions by the map, half uniform
+    /// over the sphere (so a dim texel's direction never weighs without bound).
+    pub(super) fn incident_sphere(&self, u: (f32, f32)) -> Option<IncidentSample> {
+        let towards = if u.0 < 0.5 {
+            crate::sampling::uniform_sphere((2.0 * u.0, u.1))
+        } else {
+            self.sample((2.0 * u.0 - 1.0, u.1)).0
+        };
+        self.half_drawn_by_map(towards, 0.25 / PI)
+    }
+
+    /// The sample towards `towards` drawn half the time by the map and half by another
+    /// density, `other` there.
+    fn half_drawn_by_map(&self, towards: Vec3, other: f32) -> Option<IncidentSample> {
+        let pdf = 0.5 * other + 0.5 * self.pdf(towards);
+        let radiance = self.radiance(towards);
+        (pdf > 0.0 && radiance != Vec3::ZERO).then(|| IncidentSample {
+            direction: towards,
+            distance: f32::INFINITY,
+            irradiance: radiance / pdf,
+            pdf,
+        })
+    }
+
     /// Light arriving at a point with unit normal `n`, by the half-map, half-cosine mixture.
     pub(super) fn incident(&self, n: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
         let towards = if u.0 < 0.5 {
@@ -107,14 +131,7 @@ impl EnvironmentMapLight {
         if cos <= 0.0 {
             return None;
         }
-        let pdf = 0.5 * (cos / PI) + 0.5 * self.pdf(towards);
-        let radiance = self.radiance(towards);
-        (pdf > 0.0 && radiance != Vec3::ZERO).then(|| IncidentSample {
-            direction: towards,
-            distance: f32::INFINITY,
-            irradiance: radiance / pdf,
-            pdf,
-        })
+        self.half_drawn_by_map(towards, cos / PI)
     }
 }
 
@@ -131,6 +148,10 @@ impl EnvironmentMapEmitter {
             discs: StartDiscs::new(light.0.scene, aim),
             light: light.clone(),
         }
+    }
+
+    pub(super) fn share_discs(&mut self, extra: &[(BoundingSphere, f32)]) {
+        self.discs = self.discs.sharing(extra);
     }
 
     #[inline(always)]

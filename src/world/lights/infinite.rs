@@ -31,6 +31,10 @@ pub(super) struct StartDiscs {
     targets: Vec<BoundingSphere>,
     /// The targets' disc areas summed up to and including each.
     cumulative: Vec<f32>,
+    /// When set, each target's share of the photons (summing to 1), `cumulative` summing
+    /// them instead of the areas: a start may then stand for less area on a target that
+    /// draws more than its area's share.
+    shares: Vec<f32>,
 }
 
 impl StartDiscs {
@@ -47,7 +51,78 @@ impl StartDiscs {
             scene,
             targets: aim.to_vec(),
             cumulative,
+            shares: Vec::new(),
         }
+    }
+
+    /// Discs over the whole scene that send `share` of their photons through each of
+    /// `extra` as well (a medium far smaller than the scene): still every start the scene's
+    /// disc holds, each standing for the area its density gives.
+    pub(super) fn sharing(&self, extra: &[(BoundingSphere, f32)]) -> Self {
+        let rest = 1.0 - extra.iter().map(|e| e.1).sum::<f32>();
+        let mut targets = vec![self.scene];
+        let mut shares = vec![rest.max(0.0)];
+        for &(sphere, share) in extra {
+            targets.push(sphere);
+            shares.push(share);
+        }
+        let mut sum = 0.0;
+        let cumulative = (shares.iter())
+            .map(|s| {
+                sum += s;
+                sum
+            })
+            .collect();
+        Self {
+            scene: self.scene,
+            targets,
+            cumulative,
+            shares,
+        }
+    }
+
+    /// [`StartDiscs::start`] over shared discs: the disc by its share, and the area one over
+    /// the density every disc holding the point gives it.
+    fn start_shared(&self, direction: Vec3, tangents: (Vec3, Vec3), rng: &mut Rng) -> (Vec3, f32) {
+        let (k, point) = self.picked(direction, tangents, rng);
+        let density: f32 = (self.targets.iter().zip(&self.shares).enumerate())
+            .filter(|&(j, (target, _))| j == k || self.holds(target, direction, point))
+            .map(|(_, (target, share))| share / (PI * target.radius * target.radius))
+            .sum();
+        let total = self.cumulative.last().copied().unwrap_or(1.0);
+        (point - self.back(direction), total / density)
+    }
+
+    /// How far behind the scene's centre, along `direction`, its photons start.
+    fn back(&self, direction: Vec3) -> Vec3 {
+        direction * (START_DISTANCE * self.scene.radius)
+    }
+
+    /// `target`'s centre projected along `direction` onto the plane through the scene's
+    /// centre.
+    fn projected(&self, target: &BoundingSphere, direction: Vec3) -> Vec3 {
+        target.center - direction * (target.center - self.scene.center).dot(direction)
+    }
+
+    /// Whether `target`'s disc, seen along `direction`, holds `point` of that plane.
+    fn holds(&self, target: &BoundingSphere, direction: Vec3, point: Vec3) -> bool {
+        point.distance_squared(self.projected(target, direction)) <= target.radius * target.radius
+    }
+
+    /// A target picked by `cumulative` and a uniform point of its disc (on the plane through
+    /// the scene's centre).
+    fn picked(&self, direction: Vec3, (t, b): (Vec3, Vec3), rng: &mut Rng) -> (usize, Vec3) {
+        let total = self.cumulative.last().copied().unwrap_or(1.0);
+        let pick = rng.next_f32() * total;
+        let k = (self.cumulative.iter())
+            .position(|&c| pick < c)
+            .unwrap_or(self.targets.len() - 1);
+        let (x, y) = uniform_disc(rng.next_2d());
+        let target = &self.targets[k];
+        (
+            k,
+            self.projected(target, direction) + target.radius * (x * t + y * b),
+        )
     }
 
     /// The area the scene's disc has.
@@ -64,34 +139,22 @@ impl StartDiscs {
         tangents: (Vec3, Vec3),
         rng: &mut Rng,
     ) -> (Vec3, f32) {
-        let (t, b) = tangents;
-        let center = self.scene.center;
-        let back = direction * (START_DISTANCE * self.scene.radius);
+        if !self.shares.is_empty() {
+            return self.start_shared(direction, tangents, rng);
+        }
         let Some(&total) = self.cumulative.last() else {
+            let (t, b) = tangents;
             let (x, y) = uniform_disc(rng.next_2d());
-            let point = center + self.scene.radius * (x * t + y * b);
-            return (point - back, self.scene_area());
+            let point = self.scene.center + self.scene.radius * (x * t + y * b);
+            return (point - self.back(direction), self.scene_area());
         };
-        // The targets' centres projected onto the plane through the scene's centre.
-        let projected = |target: &BoundingSphere| {
-            target.center - direction * (target.center - center).dot(direction)
-        };
-        let pick = rng.next_f32() * total;
-        let k = (self.cumulative.iter())
-            .position(|&c| pick < c)
-            .unwrap_or(self.targets.len() - 1);
-        let (x, y) = uniform_disc(rng.next_2d());
-        let point = projected(&self.targets[k]) + self.targets[k].radius * (x * t + y * b);
+        let (k, point) = self.picked(direction, tangents, rng);
         // The disc it was drawn from counts whatever rounding says of it.
         let holding = 1
             + (self.targets.iter().enumerate())
-                .filter(|&(j, target)| {
-                    j != k
-                        && point.distance_squared(projected(target))
-                            <= target.radius * target.radius
-                })
+                .filter(|&(j, target)| j != k && self.holds(target, direction, point))
                 .count();
-        (point - back, total / holding as f32)
+        (point - self.back(direction), total / holding as f32)
     }
 }
 
@@ -150,6 +213,10 @@ impl DistantEmitter {
         }
     }
 
+    pub(super) fn share_discs(&mut self, extra: &[(BoundingSphere, f32)]) {
+        self.discs = self.discs.sharing(extra);
+    }
+
     #[inline(always)]
     pub(super) fn emit(&self, rng: &mut Rng) -> Emission {
         let direction = self.light.direction;
@@ -196,6 +263,17 @@ impl Environment {
         })
     }
 
+    /// Light arriving at a point in a medium, from every direction alike: a uniform
+    /// direction over the sphere, bringing 4πL.
+    pub(super) fn incident_sphere(&self, u: (f32, f32)) -> IncidentSample {
+        IncidentSample {
+            direction: uniform_sphere(u),
+            distance: f32::INFINITY,
+            irradiance: self.radiance * (4.0 * PI),
+            pdf: 0.25 / PI,
+        }
+    }
+
     /// [`Environment::incident`] for a receiver whose shading normal is far from `n`: half
     /// the directions cosine-weighted, half uniform over the hemisphere, so a grazing one
     /// (which a shading normal lying in the face weighs fully) never brings more than 4πL.
@@ -229,6 +307,10 @@ impl EnvironmentEmitter {
             radiance: light.radiance,
             discs: StartDiscs::new(light.scene, aim),
         }
+    }
+
+    pub(super) fn share_discs(&mut self, extra: &[(BoundingSphere, f32)]) {
+        self.discs = self.discs.sharing(extra);
     }
 
     #[inline(always)]

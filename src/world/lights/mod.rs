@@ -217,6 +217,18 @@ impl LightSource {
         }
     }
 
+    /// The point a small light's light comes from (a point or spot light's position, a
+    /// sphere light's centre), around which a camera ray through a medium samples its
+    /// scattering points equiangularly; `None` for the others.
+    pub fn center(&self) -> Option<Vec3> {
+        match &self.0 {
+            Kind::Point { position, .. } => Some(*position),
+            Kind::Spot(spot) => Some(spot.position()),
+            Kind::Sphere { center, .. } => Some(*center),
+            _ => None,
+        }
+    }
+
     /// Where this light's light comes from, as the pilot rays see it.
     pub fn shape(&self) -> LightShape {
         match &self.0 {
@@ -306,6 +318,16 @@ impl LightSource {
         match &self.0 {
             Kind::Environment(environment) => environment.incident_wide(n, u),
             _ => self.sample_incident(x, n, u),
+        }
+    }
+
+    /// Samples light arriving at `x`, a point inside a medium (no surface, so every
+    /// direction counts): environments over the whole sphere, other lights as at a surface.
+    pub fn sample_incident_in_medium(&self, x: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
+        match &self.0 {
+            Kind::Environment(environment) => Some(environment.incident_sphere(u)),
+            Kind::EnvironmentMap(map) => map.incident_sphere(u),
+            _ => self.sample_incident(x, Vec3::Z, u),
         }
     }
 
@@ -419,6 +441,18 @@ impl LightEmitter {
         Self {
             source,
             aim: aim.to_vec(),
+        }
+    }
+
+    /// For a light at infinity, sends `share` of the photons through each `extra` sphere's
+    /// disc as well as over the whole scene (the start's area weighs it back); other lights
+    /// are left as they are.
+    pub fn share_with(&mut self, extra: &[(BoundingSphere, f32)]) {
+        match &mut self.source {
+            Source::Distant(e) => e.share_discs(extra),
+            Source::Environment(e) => e.share_discs(extra),
+            Source::EnvironmentMap(e) => e.share_discs(extra),
+            _ => {}
         }
     }
 

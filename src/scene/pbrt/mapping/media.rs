@@ -7,10 +7,10 @@
 //! Translate(p0) · Scale(p1 − p0). Bad values exit 2 naming their field. Owns that reading;
 //! must not build media for rendering.
 
-use super::super::parser::MediumItem;
+use super::super::parser::{MediumItem, ShapeItem};
 use super::{Mapper, param_error, value_error};
 use crate::scene::pbrt::Dialect;
-use crate::scene::{Medium, MediumKind, SceneError};
+use crate::scene::{Medium, MediumId, MediumInterface, MediumKind, SceneError, Shape};
 use glam::{Mat4, Vec3};
 
 /// pbrt-v3's default coefficients (whole milk, per mm, Jensen et al. 2001).
@@ -196,5 +196,40 @@ impl Mapper<'_> {
             density,
             grid_to_world,
         })
+    }
+}
+
+/// The medium called `name` among those read (`None` for "" or a medium not read).
+pub(super) fn named(name: &str, media: &[Medium]) -> Option<MediumId> {
+    if name.is_empty() {
+        return None;
+    }
+    (media.iter().position(|m| m.name == name)).map(|i| i as MediumId)
+}
+
+/// The `MediumInterface` in force at `shape`, as pbrt orients it: outside where the
+/// geometric normal points.
+pub(super) fn interface_of(shape: &ShapeItem, media: &[Medium]) -> MediumInterface {
+    MediumInterface {
+        inside: named(&shape.media.0, media),
+        outside: named(&shape.media.1, media),
+    }
+}
+
+/// `interface` for `placed`, one of the shapes `item` made: a sphere keeps its normal
+/// outward whatever pbrt's `ReverseOrientation` and a mirroring transform say (a mesh's
+/// winding follows them), so there its sides are swapped where pbrt's normal points in.
+pub(super) fn oriented(
+    interface: MediumInterface,
+    placed: &Shape,
+    item: &ShapeItem,
+) -> MediumInterface {
+    let mirrored = glam::Mat3::from_mat4(item.ctm).determinant() < 0.0;
+    match placed {
+        Shape::Sphere { .. } if item.reverse_orientation ^ mirrored => MediumInterface {
+            inside: interface.outside,
+            outside: interface.inside,
+        },
+        _ => interface,
     }
 }

@@ -26,8 +26,8 @@ use super::parser::{Item, Parsed};
 use super::{Dialect, Place};
 use crate::scene::files::SceneFiles;
 use crate::scene::{
-    Instance, LoadOptions, LoadReport, Material, Prototype, SceneDescription, SceneError, Texture,
-    TexturedMaterial, validate,
+    Instance, LoadOptions, LoadReport, Material, MediumBoundary, Prototype, SceneDescription,
+    SceneError, SceneMedia, Texture, TexturedMaterial, validate,
 };
 use glam::Vec3;
 use std::collections::HashMap;
@@ -121,7 +121,11 @@ pub(super) fn scene(
         }
     }
     let mut lights = Vec::new();
+    let mut light_media = Vec::new();
     for light in &parsed.lights {
+        if let Some(medium) = media::named(&light.medium, &media) {
+            light_media.push((lights.len(), medium));
+        }
         lights.push(m.light(&light.item, &light.ctm)?);
         m.unused(&light.item, "LightSource");
     }
@@ -132,10 +136,18 @@ pub(super) fn scene(
             shapes: Vec::new(),
         })
         .collect();
-    // Shapes that only bound a participating medium (pbrt's `interface` material): without
-    // media they are not there at all (pbrt passes rays through them), so they are left out.
-    let mut medium_boundaries = Vec::new();
+    let camera_medium = match m.dialect.0 {
+        Dialect::V3 => &parsed.camera_medium.1,
+        Dialect::V4 => &parsed.camera_medium.0,
+    };
+    let mut scene_media = SceneMedia {
+        camera: media::named(camera_medium, &media),
+        light_media,
+        media,
+        ..SceneMedia::default()
+    };
     for shape in &parsed.shapes {
+        let interface = media::interface_of(shape, &scene_media.media);
         if shape.area_light.is_none()
             && let Some(i) = shape.material
             && matches!(
@@ -143,13 +155,23 @@ pub(super) fn scene(
                 "interface" | "" | "none"
             )
         {
-            if m.strict {
-                return Err(shape.item.at.error(
-                    "Shape",
-                    "the shape bounds a participating medium (material \"\"), and dpm has no media (refused under --strict)",
-                ));
+            // A surface that only bounds media: rays cross it without a bounce.
+            if shape.object.is_some() {
+                m.warn(
+                    &shape.item.at,
+                    "a medium boundary inside an object is not instanced: the shape is left out"
+                        .into(),
+                );
+                continue;
             }
-            medium_boundaries.push(shape.item.at.clone());
+            let material = m.material_of(None, &parsed)?;
+            for boundary in m.shape(shape, material)? {
+                scene_media.boundaries.push(MediumBoundary {
+                    interface: media::oriented(interface, &boundary, shape),
+                    shape: boundary,
+                });
+            }
+            m.unused(&shape.item, "Shape");
             continue;
         }
         if let Some(object) = shape.object {
@@ -167,22 +189,24 @@ pub(super) fn scene(
         match shape.area_light {
             Some(a) => {
                 let area = &parsed.area_lights[a];
+                if let Some(medium) = interface.outside {
+                    scene_media.light_media.push((lights.len(), medium));
+                }
                 lights.push(m.area_light(shape, area)?);
                 m.unused(area, "AreaLightSource");
             }
             None => {
                 let material = m.material_of(shape.material, &parsed)?;
-                shapes.extend(m.shape(shape, material)?);
+                let placed = m.shape(shape, material)?;
+                if interface.is_transition() {
+                    let sides = (placed.iter().enumerate())
+                        .map(|(i, p)| (shapes.len() + i, media::oriented(interface, p, shape)));
+                    scene_media.shape_interfaces.extend(sides);
+                }
+                shapes.extend(placed);
             }
         }
         m.unused(&shape.item, "Shape");
-    }
-    if let Some(at) = medium_boundaries.first() {
-        let n = medium_boundaries.len();
-        m.warn(
-            at,
-            format!("{n} shape(s) with the medium-boundary material \"\" left out: they only bound participating media, which dpm does not render, so the media inside them are missing from the image"),
-        );
     }
     let first = || Place {
         file: path.to_path_buf(),
@@ -196,7 +220,7 @@ pub(super) fn scene(
         ));
     }
     let instances = instances(&parsed, &prototypes)?;
-    if shapes.is_empty() && instances.is_empty() {
+    if shapes.is_empty() && instances.is_empty() && scene_media.boundaries.is_empty() {
         return Err(first().error("Shape", "the scene has no shapes besides its lights"));
     }
     let scene = SceneDescription {
@@ -210,7 +234,7 @@ pub(super) fn scene(
         response: film.response,
         textured_materials: m.textured_materials,
         transport,
-        media,
+        media: scene_media,
     };
     let mut report = m.report;
     report

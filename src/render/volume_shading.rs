@@ -1,0 +1,231 @@
+//! The eye pass in participating media: along every camera segment inside a medium, the
+//! light the medium scatters towards the eye, and what it lets through to the surface behind.
+//! Single scattering comes from the lights by next-event estimation (a point, spot or sphere
+//! light's scattering point sampled equiangularly along the segment, the other lights' by a
+//! free flight), every shadow ray ratio-tracked through the media it crosses; the rest (light
+//! that scattered or bounced before, and volumetric caustics) from the volume photon maps by
+//! the beam radiance estimate. Part of [`Integrator`]; owns that split, must not build maps.
+
+use super::integrator::{Integrator, Radiance};
+use crate::estimate::{Scratch, beam};
+use crate::media::FreeFlight;
+use crate::photon::volume::VolumeMap;
+use crate::sampling::PathSampler;
+use crate::scene::MediumId;
+use crate::world::Interaction;
+use crate::world::lights::LightSource;
+use glam::Vec3;
+
+/// The volume photon maps a pass reads along camera segments in media.
+#[derive(Clone, Copy, Default)]
+pub struct VolumeMaps<'a> {
+    /// Photons whose first scattering event came after mirrors and glass alone.
+    pub caustic: Option<&'a VolumeMap>,
+    /// Photons that scattered or bounced off a diffuse surface before.
+    pub global: Option<&'a VolumeMap>,
+}
+
+/// What a camera segment through media brings: the light scattered towards its start, what
+/// it lets through from its end, and the medium at its end.
+pub(super) struct ThroughMedia {
+    pub in_scattered: Radiance,
+    pub transmittance: Vec3,
+    pub medium_at_end: Option<MediumId>,
+}
+
+impl Integrator<'_> {
+    /// The medium a ray leaving `hit` along `dir` is in, `medium` the one it arrived in.
+    #[inline]
+    pub(super) fn medium_after(
+        &self,
+        hit: &Interaction,
+        dir: Vec3,
+        medium: Option<MediumId>,
+    ) -> Option<MediumId> {
+        match &self.world.media {
+            None => medium,
+            Some(media) => media.after_surface(
+                hit.geometry,
+                hit.instance,
+                hit.geometric_normal,
+                dir,
+                medium,
+            ),
+        }
+    }
+
+    /// What reaches `p` from `p + tfar·dir` (unit `dir`) starting in `medium`: nothing behind
+    /// a surface, else the media's transmittance (1 without media).
+    #[inline]
+    pub(super) fn visibility(
+        &self,
+        p: Vec3,
+        dir: Vec3,
+        tfar: f32,
+        medium: Option<MediumId>,
+        sampler: &mut PathSampler,
+    ) -> Vec3 {
+        if self.world.occluded(p, dir, 0.0, tfar) {
+            return Vec3::ZERO;
+        }
+        match &self.world.media {
+            None => Vec3::ONE,
+            Some(media) => media.transmittance((p, dir), tfar, medium, &mut sampler.rng),
+        }
+    }
+
+    /// The segment `origin + t·dir`, t from 0 to `t_max` (the first surface, or infinity),
+    /// starting in `medium`, on an eye path `depth` bounces from the camera: a scattering
+    /// point there is that path's next vertex, lit by the lights and read from the maps as
+    /// far as the scene's cap on paths allows, as a surface there would be.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn through_media(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_max: f32,
+        medium: Option<MediumId>,
+        depth: u32,
+        sampler: &mut PathSampler,
+        scratch: &mut Scratch,
+    ) -> ThroughMedia {
+        let mut out = ThroughMedia {
+            in_scattered: Radiance::default(),
+            transmittance: Vec3::ONE,
+            medium_at_end: medium,
+        };
+        let Some(media) = &self.world.media else {
+            return out;
+        };
+        let transport = self.world.description.transport;
+        let (lit, reads_photons) = (transport.shades(depth), transport.reads_photons(depth));
+        let end = media.walk(origin, dir, t_max, medium, |s| {
+            let m = media.medium(s.medium);
+            let tr = out.transmittance;
+            if lit {
+                let single = self.single_scattered(origin, dir, s.medium, (s.t0, s.t1), sampler);
+                out.in_scattered.direct += tr * single;
+            }
+            let found = &mut scratch.beam;
+            let rng = &mut sampler.rng;
+            if let (true, Some(map)) = (reads_photons, self.volume.caustic) {
+                let l = beam::in_scattered(map, m, origin, dir, s.t0, s.t1, rng, found);
+                out.in_scattered.caustic += tr * l;
+            }
+            if let (true, Some(map)) = (reads_photons, self.volume.global) {
+                let l = beam::in_scattered(map, m, origin, dir, s.t0, s.t1, rng, found);
+                out.in_scattered.indirect += tr * l;
+            }
+            out.transmittance *= m.transmittance(origin, dir, s.t0, s.t1, rng);
+            out.transmittance.max_element() > 0.0
+        });
+        out.medium_at_end = end.flatten();
+        out
+    }
+
+    /// Single scattering towards `origin` from the stretch `(t0, t1)` of `origin + t·dir`
+    /// inside `medium`, before the transmittance up to `t0`: one scattering point per light
+    /// (equiangular about a small light, else by a free flight shared by the others), its
+    /// light sampled as at a surface but over the whole sphere, its shadow ray ratio-tracked.
+    fn single_scattered(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        medium: MediumId,
+        (t0, t1): (f32, f32),
+        sampler: &mut PathSampler,
+    ) -> Vec3 {
+        let Some(media) = &self.world.media else {
+            return Vec3::ZERO;
+        };
+        let m = media.medium(medium);
+        let phase = m.phase();
+        let mut sum = Vec3::ZERO;
+        // The free-flight point, drawn once for every light without a centre.
+        let flight = if self
+            .world
+            .light_sources
+            .iter()
+            .any(|l| l.center().is_none())
+        {
+            m.free_flight(origin, dir, t0, t1, &mut sampler.rng)
+        } else {
+            FreeFlight::Passed { weight: Vec3::ZERO }
+        };
+        for light in &self.world.light_sources {
+            let count = if light.is_delta() {
+                1
+            } else {
+                self.light_samples.max(1)
+            };
+            let mut from_light = Vec3::ZERO;
+            for _ in 0..count {
+                let (t, weight) = match light.center() {
+                    Some(c) => {
+                        match equiangular(origin, dir, c, (t0, t1), sampler.rng.next_f32()) {
+                            Some((t, pdf)) => {
+                                let x = origin + t * dir;
+                                let tr = m.transmittance(origin, dir, t0, t, &mut sampler.rng);
+                                (t, tr * m.sigma_s_at(x) / pdf)
+                            }
+                            None => continue,
+                        }
+                    }
+                    None => match flight {
+                        FreeFlight::Scattered { t, weight } => (t, weight),
+                        FreeFlight::Passed { .. } => continue,
+                    },
+                };
+                let x = origin + t * dir;
+                from_light += weight * self.light_at(light, x, -dir, &phase, medium, sampler);
+            }
+            sum += from_light / count as f32;
+        }
+        sum
+    }
+
+    /// One sample of `light`'s radiance at the medium point `x`, scattered towards `wo`.
+    fn light_at(
+        &self,
+        light: &LightSource,
+        x: Vec3,
+        wo: Vec3,
+        phase: &crate::media::phase::HenyeyGreenstein,
+        medium: MediumId,
+        sampler: &mut PathSampler,
+    ) -> Vec3 {
+        let Some(s) = light.sample_incident_in_medium(x, sampler.rng.next_2d()) else {
+            return Vec3::ZERO;
+        };
+        let p = phase.p(wo, s.direction);
+        if p <= 0.0 || s.irradiance == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let tfar = s.distance * (1.0 - 1e-4);
+        s.irradiance * p * self.visibility(x, s.direction, tfar, Some(medium), sampler)
+    }
+}
+
+/// A distance along `origin + t·dir` in (`t0`, `t1`) drawn with density proportional to
+/// 1/|x(t) − c|² (Kulla and Fajardo's equiangular sampling), and that density; `None` where
+/// the stretch is empty or passes through `c`.
+fn equiangular(
+    origin: Vec3,
+    dir: Vec3,
+    c: Vec3,
+    (t0, t1): (f32, f32),
+    u: f32,
+) -> Option<(f32, f32)> {
+    let delta = (c - origin).dot(dir);
+    let h = (origin + delta * dir - c).length();
+    let t1 = t1.min(delta + 1e7 * h.max(1e-6));
+    if t1.partial_cmp(&t0) != Some(std::cmp::Ordering::Greater) || h <= 0.0 {
+        return None;
+    }
+    let (a, b) = (((t0 - delta) / h).atan(), ((t1 - delta) / h).atan());
+    let theta = a + u * (b - a);
+    let t = (delta + h * theta.tan()).clamp(t0, t1);
+    let r2 = h * h + (t - delta) * (t - delta);
+    let pdf = h / ((b - a) * r2);
+    (pdf.is_finite() && pdf > 0.0).then_some((t, pdf))
+}
