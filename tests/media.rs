@@ -354,3 +354,118 @@ fn bad_media_are_refused_naming_their_place_and_field() {
         assert!(e.field.contains(field), "{body}: {e}");
     }
 }
+
+/// A TOML scene: a camera, a point light in `light_medium`, media `media` and a sphere
+/// whose material and sides `object` gives.
+fn toml_scene(media: &str, light_medium: &str, object: &str) -> String {
+    format!(
+        "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov_y = 30\nresolution = [32, 32]\n\
+         medium = \"fog\"\n\n[[lights]]\ntype = \"point\"\nposition = [0, 2, 0]\n\
+         power = [1, 1, 1]\n{light_medium}\n\n[materials.white]\ntype = \"diffuse\"\n\
+         albedo = [0.5, 0.5, 0.5]\n\n{media}\n\n[[objects]]\ntype = \"sphere\"\n\
+         center = [0, 0, 0]\nradius = 1\n{object}\n"
+    )
+}
+
+const FOG: &str = "[media.fog]\ntype = \"homogeneous\"\nsigma_a = [0.1, 0.1, 0.1]\n\
+                   sigma_s = [0.5, 0.5, 0.5]\ng = 0.3";
+
+#[test]
+fn the_toml_format_places_media_as_the_pbrt_readers_do() {
+    let grid = "[media.smoke]\ntype = \"grid\"\nsigma_a = [1, 1, 1]\nsigma_s = [2, 2, 2]\n\
+                size = [2, 1, 1]\ndensity = [0.5, 1]\np0 = [-1, -1, -1]\np1 = [1, 1, 1]";
+    let text = toml_scene(
+        &format!("{FOG}\n\n{grid}"),
+        "medium = \"fog\"",
+        "material = \"\"\ninside = \"smoke\"\noutside = \"fog\"",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.toml");
+    let (scene, _) = dpm::scene::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"));
+    let media = &scene.media;
+    // In name order: fog, smoke.
+    assert_eq!(media.media.len(), 2);
+    assert_eq!(
+        (media.media[0].name.as_str(), media.media[0].g),
+        ("fog", 0.3)
+    );
+    assert!(matches!(
+        media.media[1].kind,
+        MediumKind::Grid {
+            size: [2, 1, 1],
+            ..
+        }
+    ));
+    assert_eq!(media.camera, Some(0));
+    assert_eq!(media.light_media, vec![(0, 0)]);
+    assert!(scene.shapes.is_empty(), "a boundary is not a surface");
+    let sides = dpm::scene::MediumInterface {
+        inside: Some(1),
+        outside: Some(0),
+    };
+    assert_eq!(media.boundaries.len(), 1);
+    assert_eq!(media.boundaries[0].interface, sides);
+    assert_eq!(media.media[1].bounded_by, 1);
+    // A glass sphere of smoke in fog is a surface with an interface.
+    let glass = toml_scene(
+        &format!("{FOG}\n\n{grid}"),
+        "",
+        "material = \"white\"\ninside = \"smoke\"\noutside = \"fog\"",
+    );
+    let (scene, _) = dpm::scene::parse(&glass, &path).unwrap();
+    assert_eq!(scene.media.shape_interfaces, vec![(0, sides)]);
+    assert!(scene.media.light_media.is_empty());
+}
+
+#[test]
+fn bad_toml_media_are_refused_naming_their_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.toml");
+    let homogeneous = |fields: &str| format!("[media.fog]\ntype = \"homogeneous\"\n{fields}");
+    let grid = |fields: &str| {
+        format!("[media.fog]\ntype = \"grid\"\nsigma_a = [1, 1, 1]\nsigma_s = [1, 1, 1]\n{fields}")
+    };
+    for (media, object, field) in [
+        (
+            homogeneous("sigma_a = [1, -1, 1]\nsigma_s = [1, 1, 1]"),
+            "material = \"white\"",
+            "media.fog.sigma_a",
+        ),
+        (
+            homogeneous("sigma_a = [1, 1, 1]\nsigma_s = [1, 1, 1]\ng = 1.0"),
+            "material = \"white\"",
+            "media.fog.g",
+        ),
+        (
+            grid("size = [2, 2, 1]\ndensity = [1, 2, 3]"),
+            "material = \"white\"",
+            "media.fog.density",
+        ),
+        (
+            grid("size = [1, 1, 1]\ndensity = [1]\np1 = [1, 0, 1]"),
+            "material = \"white\"",
+            "media.fog.p1",
+        ),
+        (
+            FOG.to_string(),
+            "material = \"white\"\ninside = \"fig\"",
+            "objects[0].inside",
+        ),
+        (FOG.to_string(), "material = \"\"", "objects[0].material"),
+    ] {
+        let text = toml_scene(&media, "", object);
+        let e = dpm::scene::parse(&text, &path).unwrap_err();
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.line.is_some(), "{e}");
+        let line = text.lines().position(|l| {
+            let key = field.rsplit('.').next().unwrap();
+            let key = key.split('[').next().unwrap();
+            l.starts_with(&format!("{key} ")) || (key == "fog" && l.starts_with("[media"))
+        });
+        assert_eq!(e.line, line.map(|l| l + 1), "{field}: {e}");
+    }
+    // The camera's medium must exist.
+    let text = toml_scene("", "", "material = \"white\"");
+    let e = dpm::scene::parse(&text, &path).unwrap_err();
+    assert_eq!(e.field, "camera.medium", "{e}");
+}

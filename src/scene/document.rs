@@ -104,6 +104,15 @@ impl<'t> Document<'t> {
     }
 
     /// 1-based line holding byte `offset`.
+    /// `file:line` of the field at `path`, for reports.
+    pub(crate) fn place(&self, path: &str) -> String {
+        format!(
+            "{}:{}",
+            self.file.display(),
+            self.line_of(self.offset_of(path))
+        )
+    }
+
     pub(crate) fn line_of(&self, offset: usize) -> usize {
         let end = offset.min(self.text.len());
         self.text.as_bytes()[..end]

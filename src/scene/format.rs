@@ -5,12 +5,13 @@
 
 use super::SceneError;
 use super::document::{Document, Value, child_path, quoted_list};
+use super::toml_media::take_name;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use std::fmt;
 use toml::de::DeValue;
 
-const TOP_LEVEL_FIELDS: [&str; 4] = ["camera", "lights", "materials", "objects"];
+const TOP_LEVEL_FIELDS: [&str; 5] = ["camera", "lights", "materials", "objects", "media"];
 const LIGHT_TYPES: [&str; 7] = [
     "point",
     "sphere",
@@ -45,6 +46,17 @@ pub(crate) struct SceneSpec {
     /// In name order.
     pub materials: Vec<(String, MaterialSpec)>,
     pub objects: Vec<ObjectSpec>,
+    /// The media the camera, each light and each object's two sides name (`medium`,
+    /// `inside`, `outside`; docs/scene-format.md), taken out of their tables.
+    pub media_names: MediaNames,
+}
+
+/// What the camera, the lights and the objects say of media, by name.
+#[derive(Default)]
+pub(crate) struct MediaNames {
+    pub camera: Option<String>,
+    pub lights: Vec<Option<String>>,
+    pub objects: Vec<(Option<String>, Option<String>)>,
 }
 
 #[derive(Deserialize)]
@@ -392,16 +404,23 @@ pub(crate) fn read_scene(doc: &Document) -> Result<SceneSpec, SceneError> {
         }
     }
 
+    let mut media_names = MediaNames::default();
     let camera = match root.get("camera") {
-        Some(value) => doc.deserialize::<CameraSpec>(value)?,
+        Some(value) => {
+            let (value, medium) = take_name(doc, "camera", value, "medium")?;
+            media_names.camera = medium;
+            doc.deserialize::<CameraSpec>(&value)?
+        }
         None => return Err(doc.error("camera", "missing field")),
     };
 
-    let lights = array_of_tables(doc, "lights")?
-        .iter()
-        .enumerate()
-        .map(|(i, value)| read_light(doc, &format!("lights[{i}]"), value))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut lights = Vec::new();
+    for (i, value) in array_of_tables(doc, "lights")?.iter().enumerate() {
+        let path = format!("lights[{i}]");
+        let (value, medium) = take_name(doc, &path, value, "medium")?;
+        media_names.lights.push(medium);
+        lights.push(read_light(doc, &path, &value)?);
+    }
 
     let mut materials = Vec::new();
     if let Some(value) = root.get("materials") {
@@ -417,17 +436,21 @@ pub(crate) fn read_scene(doc: &Document) -> Result<SceneSpec, SceneError> {
         }
     }
 
-    let objects = array_of_tables(doc, "objects")?
-        .iter()
-        .enumerate()
-        .map(|(i, value)| read_object(doc, &format!("objects[{i}]"), value))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut objects = Vec::new();
+    for (i, value) in array_of_tables(doc, "objects")?.iter().enumerate() {
+        let path = format!("objects[{i}]");
+        let (value, inside) = take_name(doc, &path, value, "inside")?;
+        let (value, outside) = take_name(doc, &path, &value, "outside")?;
+        media_names.objects.push((inside, outside));
+        objects.push(read_object(doc, &path, &value)?);
+    }
 
     Ok(SceneSpec {
         camera,
         lights,
         materials,
         objects,
+        media_names,
     })
 }
 

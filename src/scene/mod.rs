@@ -27,6 +27,7 @@ mod rules;
 pub(crate) mod tessellate;
 pub mod texture;
 mod toml_bsdf;
+mod toml_media;
 mod toml_mix;
 mod toml_texture;
 pub(crate) mod transform;
@@ -663,15 +664,37 @@ pub fn parse_with(
 
     toml_mix::check_nesting(&doc, &spec.materials, materials.materials())?;
 
+    let media = toml_media::read_media(&doc)?;
+    let names = &spec.media_names;
+    let mut scene_media = SceneMedia {
+        camera: toml_media::resolve(&doc, "camera.medium", names.camera.as_deref(), &media)?,
+        ..SceneMedia::default()
+    };
+    for (i, name) in names.lights.iter().enumerate() {
+        let path = format!("lights[{i}].medium");
+        if let Some(m) = toml_media::resolve(&doc, &path, name.as_deref(), &media)? {
+            scene_media.light_media.push((i, m));
+        }
+    }
+    let bounds_only = |object: &format::ObjectSpec| match object {
+        format::ObjectSpec::Sphere(s) => s.material.is_empty(),
+        format::ObjectSpec::Quad(q) => q.material.is_empty(),
+        format::ObjectSpec::Mesh(m) => m.material.as_deref() == Some(""),
+    };
+    if spec.objects.iter().any(bounds_only) {
+        // The material "" of objects that only bound media: never shaded.
+        materials.add_named("", Material::Diffuse { albedo: Vec3::ZERO });
+    }
+
     let mut shapes = Vec::new();
     for (i, object) in spec.objects.iter().enumerate() {
         let path = format!("objects[{i}]");
-        match object {
+        let made = match object {
             format::ObjectSpec::Sphere(sphere) => {
-                shapes.push(validate::sphere(&doc, &path, sphere, &materials)?);
+                vec![validate::sphere(&doc, &path, sphere, &materials)?]
             }
             format::ObjectSpec::Quad(quad) => {
-                shapes.push(validate::quad(&doc, &path, quad, &materials)?);
+                vec![validate::quad(&doc, &path, quad, &materials)?]
             }
             format::ObjectSpec::Mesh(mesh_spec) => {
                 let placement =
@@ -686,9 +709,47 @@ pub fn parse_with(
                 )?;
                 report.degenerate_triangles_dropped += loaded.degenerate_triangles_dropped;
                 report.warnings.extend(loaded.warnings);
-                shapes.extend(loaded.meshes.into_iter().map(Shape::Triangles));
+                loaded.meshes.into_iter().map(Shape::Triangles).collect()
             }
+        };
+        let (inside, outside) = &names.objects[i];
+        let sides = (inside.as_deref(), outside.as_deref());
+        let interface = toml_media::interface(&doc, &path, sides, &media)?;
+        if bounds_only(object) {
+            if !interface.is_transition() {
+                return Err(doc.error(
+                    &document::child_path(&path, "material"),
+                    "material \"\" only bounds media: name a different medium inside and outside",
+                ));
+            }
+            let boundaries = made
+                .into_iter()
+                .map(|shape| MediumBoundary { shape, interface });
+            scene_media.boundaries.extend(boundaries);
+            continue;
         }
+        if interface.is_transition() {
+            let first = shapes.len();
+            let indices = first..first + made.len();
+            scene_media
+                .shape_interfaces
+                .extend(indices.map(|k| (k, interface)));
+        }
+        shapes.extend(made);
+    }
+    scene_media.media = media;
+    let named = |m: MediumId| {
+        let sides = scene_media.boundaries.iter().map(|b| b.interface);
+        let surfaces = scene_media.shape_interfaces.iter().map(|(_, i)| *i);
+        (sides.chain(surfaces))
+            .filter(|i| i.inside == Some(m) || i.outside == Some(m))
+            .count()
+    };
+    let counts: Vec<usize> = (0..scene_media.media.len())
+        .map(|m| named(m as MediumId))
+        .collect();
+    for (medium, count) in scene_media.media.iter_mut().zip(counts) {
+        medium.bounded_by = count;
     }
 
     let scene = SceneDescription {
@@ -702,7 +763,7 @@ pub fn parse_with(
         textured_materials,
         response: ImageResponse::default(),
         transport: Transport::Full,
-        media: SceneMedia::default(),
+        media: scene_media,
     };
     report
         .warnings
