@@ -114,7 +114,7 @@ pub(crate) fn read_media(doc: &Document) -> Result<Vec<Medium>, SceneError> {
                 )
             }
         };
-        if !(g.abs() < 1.0) {
+        if g.is_nan() || g.abs() >= 1.0 {
             return Err(doc.error(&field("g"), format!("{g}: the asymmetry g lies in (−1, 1)")));
         }
         media.push(Medium {
