@@ -125,7 +125,7 @@ fn a_spot_lights_single_scattering_matches_quadrature() {
          Film \"image\" \"integer xresolution\" [4] \"integer yresolution\" [4]\n\
          WorldBegin\n\
          LightSource \"spot\" \"point from\" [0 1 0] \"point to\" [0 0 0] \
-         \"float coneangle\" [89] \"float conedelta\" [1] \"rgb I\" [{intensity} {intensity} {intensity}]\n\
+         \"float coneangle\" [89] \"float conedeltaangle\" [1] \"rgb I\" [{intensity} {intensity} {intensity}]\n\
          Material \"matte\" \"rgb Kd\" [0 0 0]\nTranslate 0 0 -1000\n\
          Shape \"sphere\" \"float radius\" [1]\nWorldEnd\n"
     );

@@ -271,12 +271,16 @@ fn a_pbrt_spot_light_gives_the_plane_its_analytic_irradiance_in_either_dialect()
     let intensity = DVec3::new(10.0, 6.0, 3.0);
     let position = DVec3::new(0.0, 1.0, 0.0);
     let axis = DVec3::new(0.3, -1.0, 0.0).normalize();
-    let light = format!(
-        "LightSource \"spot\" \"point from\" [0 1 0] \"point to\" [0.3 0 0] \"float coneangle\" {alpha} \
-         \"float conedelta\" {delta} \"rgb I\" [10 6 3]"
-    );
-    // pbrt-v3 (its file ends with WorldEnd) shapes the edge with t⁴, pbrt-v4 with a smoothstep.
-    for (end, quartic) in [("WorldEnd\n", true), ("", false)] {
+    // pbrt-v3 (its file ends with WorldEnd) shapes the edge with t⁴ and names its width
+    // "conedeltaangle", pbrt-v4 with a smoothstep and "conedelta".
+    for (end, quartic, name) in [
+        ("WorldEnd\n", true, "conedeltaangle"),
+        ("", false, "conedelta"),
+    ] {
+        let light = format!(
+            "LightSource \"spot\" \"point from\" [0 1 0] \"point to\" [0.3 0 0] \"float coneangle\" {alpha} \
+             \"float {name}\" {delta} \"rgb I\" [10 6 3]"
+        );
         let (outcome, desc) = render_pbrt(&pbrt_plane(&light, end));
         let (cos_a, cos_b) = (alpha.to_radians().cos(), beta.to_radians().cos());
         let falloff = |c: f64| {

@@ -14,9 +14,11 @@
 //!   outside) and the majorant grid a 3-D DDA walks (pbrt-v4's design: a thin wisp in a mostly
 //!   empty grid does not cost the densest voxel's steps).
 //! - [`tracking`]: delta and ratio tracking over the majorant segments.
+//! - [`equiangular`]: where a small light's single scattering is sampled along a ray.
 //! - [`medium`]: one medium whatever its kind, as transport asks of it: transmittance, free
 //!   flights and the phase function.
 
+pub mod equiangular;
 pub mod grid;
 pub mod homogeneous;
 pub mod medium;

@@ -299,6 +299,8 @@ pub struct PassReport {
     /// The caustic estimate with every number resolved.
     pub estimator: Option<String>,
     pub caustic_bytes_per_photon: Option<f64>,
+    /// The volume photon maps' photons and heap bytes (both maps), in a scene with media.
+    pub volume_maps: Option<(usize, usize)>,
 }
 
 /// The tables a pass's global map is read through (see [`PassContext::irradiance_tables`]).
@@ -492,6 +494,12 @@ impl PassContext<'_> {
             global: global.as_ref().map(|(_, c)| *c),
             estimator,
             caustic_bytes_per_photon: caustic.as_ref().map(|(m, _)| m.bytes_per_photon()),
+            volume_maps: (volume.0.is_some() || volume.1.is_some()).then(|| {
+                let maps = [&volume.0, &volume.1];
+                let photons = maps.iter().flat_map(|m| m.iter()).map(|m| m.len()).sum();
+                let bytes = maps.iter().flat_map(|m| m.iter()).map(|m| m.bytes()).sum();
+                (photons, bytes)
+            }),
         }))
     }
 

@@ -102,6 +102,10 @@ pub struct RenderOutcome {
     pub global: Option<TraceCounts>,
     /// The last pass's caustic estimate, every number resolved.
     pub estimator: Option<String>,
+    /// The last pass's volume photon maps: photons and heap bytes (a scene with media).
+    pub volume_maps: Option<(usize, usize)>,
+    /// Heap bytes of the media's density and majorant grids (a scene with media).
+    pub media_bytes: Option<usize>,
     pub passes: Vec<PassRecord>,
     /// Ctrl-C stopped the run; the film holds the passes completed before it.
     pub interrupted: bool,
@@ -282,7 +286,10 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     };
     let ran = passes.run(start, &mut times)?;
     let film_path = passes.film_path;
-    finish(args, output, film_path.as_deref(), ran, times)
+    let media_bytes = world.media.as_ref().map(|m| m.bytes());
+    let mut outcome = finish(args, output, film_path.as_deref(), ran, times)?;
+    outcome.media_bytes = media_bytes;
+    Ok(outcome)
 }
 
 /// Writes what the complete passes hold (the image, the film, the kernel field, the stats)
@@ -314,6 +321,8 @@ fn finish(
         caustic_bytes_per_photon: last.and_then(|r| r.caustic_bytes_per_photon),
         global: last.and_then(|r| r.global),
         estimator: last.and_then(|r| r.estimator.clone()),
+        volume_maps: last.and_then(|r| r.volume_maps),
+        media_bytes: None,
         passes: ran.records,
         interrupted: ran.interrupted,
         budget_note: ran.budget_note,
@@ -356,6 +365,8 @@ fn write_stats(path: &Path, args: &RenderArgs, outcome: &RenderOutcome) -> Resul
         "interrupted": outcome.interrupted,
         "caustic": outcome.caustic.map(|c| serde_json::json!({"emitted": c.emitted, "stored": c.stored, "bytes_per_photon": outcome.caustic_bytes_per_photon})),
         "global": outcome.global.map(|c| serde_json::json!({"emitted": c.emitted, "stored": c.stored})),
+        "volume_maps": outcome.volume_maps.map(|(photons, bytes)| serde_json::json!({"photons": photons, "bytes": bytes})),
+        "media_bytes": outcome.media_bytes,
         "phases": outcome.times.phases,
         "total_seconds": outcome.times.total_seconds(),
         "peak_resident_bytes": crate::resident_memory::peak_resident_bytes(),

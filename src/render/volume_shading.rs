@@ -9,6 +9,7 @@
 use super::integrator::{Integrator, Radiance};
 use crate::estimate::{Scratch, beam};
 use crate::media::FreeFlight;
+use crate::media::equiangular::{equiangular, within_cone};
 use crate::photon::volume::VolumeMap;
 use crate::sampling::PathSampler;
 use crate::scene::MediumId;
@@ -162,7 +163,7 @@ impl Integrator<'_> {
             for _ in 0..count {
                 let (t, weight) = match light.center() {
                     Some(c) => {
-                        match equiangular(origin, dir, c, (t0, t1), sampler.rng.next_f32()) {
+                        match self.equiangular_on(light, c, (origin, dir), (t0, t1), sampler) {
                             Some((t, pdf)) => {
                                 let x = origin + t * dir;
                                 let tr = m.transmittance(origin, dir, t0, t, &mut sampler.rng);
@@ -182,6 +183,23 @@ impl Integrator<'_> {
             sum += from_light / count as f32;
         }
         sum
+    }
+
+    /// A scattering point for `light` (centre `c`) on the stretch (`t0`, `t1`) of the ray,
+    /// drawn equiangularly about `c` within the part its cone lights (a spot's).
+    fn equiangular_on(
+        &self,
+        light: &LightSource,
+        c: Vec3,
+        (origin, dir): (Vec3, Vec3),
+        span: (f32, f32),
+        sampler: &mut PathSampler,
+    ) -> Option<(f32, f32)> {
+        let span = match light.cone() {
+            Some(cone) => within_cone(origin, dir, cone, span)?,
+            None => span,
+        };
+        equiangular(origin, dir, c, span, sampler.rng.next_f32())
     }
 
     /// One sample of `light`'s radiance at the medium point `x`, scattered towards `wo`.
@@ -204,28 +222,4 @@ impl Integrator<'_> {
         let tfar = s.distance * (1.0 - 1e-4);
         s.irradiance * p * self.visibility(x, s.direction, tfar, Some(medium), sampler)
     }
-}
-
-/// A distance along `origin + t·dir` in (`t0`, `t1`) drawn with density proportional to
-/// 1/|x(t) − c|² (Kulla and Fajardo's equiangular sampling), and that density; `None` where
-/// the stretch is empty or passes through `c`.
-fn equiangular(
-    origin: Vec3,
-    dir: Vec3,
-    c: Vec3,
-    (t0, t1): (f32, f32),
-    u: f32,
-) -> Option<(f32, f32)> {
-    let delta = (c - origin).dot(dir);
-    let h = (origin + delta * dir - c).length();
-    let t1 = t1.min(delta + 1e7 * h.max(1e-6));
-    if t1.partial_cmp(&t0) != Some(std::cmp::Ordering::Greater) || h <= 0.0 {
-        return None;
-    }
-    let (a, b) = (((t0 - delta) / h).atan(), ((t1 - delta) / h).atan());
-    let theta = a + u * (b - a);
-    let t = (delta + h * theta.tan()).clamp(t0, t1);
-    let r2 = h * h + (t - delta) * (t - delta);
-    let pdf = h / ((b - a) * r2);
-    (pdf.is_finite() && pdf > 0.0).then_some((t, pdf))
 }

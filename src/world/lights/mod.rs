@@ -229,6 +229,15 @@ impl LightSource {
         }
     }
 
+    /// A spot light's cone (apex, unit axis, cosine of the half-angle past which it is
+    /// dark): no light of it leaves outside.
+    pub fn cone(&self) -> Option<(Vec3, Vec3, f32)> {
+        match &self.0 {
+            Kind::Spot(spot) => Some(spot.cone()),
+            _ => None,
+        }
+    }
+
     /// Where this light's light comes from, as the pilot rays see it.
     pub fn shape(&self) -> LightShape {
         match &self.0 {

@@ -108,6 +108,11 @@ impl Spot {
         self.position
     }
 
+    /// The cone it lights: apex, unit axis, cosine of the half-angle past which it is dark.
+    pub(super) fn cone(&self) -> (Vec3, Vec3, f32) {
+        (self.position, self.axis, self.cos_cone)
+    }
+
     pub(super) fn new(
         position: Vec3,
         direction: Vec3,

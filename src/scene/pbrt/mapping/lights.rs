@@ -58,7 +58,13 @@ impl Mapper<'_> {
                     ));
                 }
                 let cone = item.params.float("coneangle").map_err(p)?.unwrap_or(30.0);
-                let delta = item.params.float("conedelta").map_err(p)?.unwrap_or(5.0);
+                // pbrt-v3 names the band "conedeltaangle" (its "conedelta" is an unused
+                // parameter, so the default holds), pbrt-v4 "conedelta".
+                let delta_name = match self.dialect.0 {
+                    Dialect::V3 => "conedeltaangle",
+                    Dialect::V4 => "conedelta",
+                };
+                let delta = item.params.float(delta_name).map_err(p)?.unwrap_or(5.0);
                 if !(cone > 0.0 && cone <= 180.0) {
                     return Err(value_error(
                         item,
