@@ -98,9 +98,9 @@ fn main() -> ExitCode {
                         let per = bytes as f64 / photons.max(1) as f64;
                         format!("volume maps {per:.1} bytes/photon ({photons} photons)")
                     }),
-                    outcome.media_bytes.map(|b| {
-                        format!("media grids {:.1} MiB", b as f64 / (1 << 20) as f64)
-                    }),
+                    outcome
+                        .media_bytes
+                        .map(|b| format!("media grids {:.1} MiB", b as f64 / (1 << 20) as f64)),
                     dpm::resident_memory::peak_resident_bytes()
                         .map(|b| format!("peak resident {:.0} MiB", b as f64 / (1 << 20) as f64)),
                 ];

@@ -213,3 +213,63 @@ fn a_media_scene_renders_the_same_on_one_thread_and_two() {
     );
     assert_eq!(one.pixels, two.pixels);
 }
+
+#[test]
+fn the_memory_check_counts_volume_photons_and_grids() {
+    let medium = "\"string type\" \"heterogeneous\" \"integer nx\" [2] \"float density\" [1 2] \
+                  \"rgb sigma_a\" [0.5 0.5 0.5] \"rgb sigma_s\" [2 2 2]";
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_scene(dir.path(), "scene.pbrt", &sphere_of(medium));
+    let out = dir.path().join("scene.pfm");
+    let args = [
+        path_str(&path),
+        "-o",
+        path_str(&out),
+        "--global-photons",
+        "100000000000",
+    ];
+    let Err(e) = dpm::render::pipeline::run(&render_args(&args)) else {
+        panic!("a hundred billion photons fit");
+    };
+    let message = e.to_string();
+    let per = dpm::render::memory_budget::VOLUME_BYTES_PER_PHOTON;
+    assert!(
+        message.contains("the media's grids") && message.contains(&format!("{per} bytes a photon")),
+        "{message}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn films_of_a_media_scene_merge_and_resume_into_one_runs_image() {
+    let medium = "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0.2 0.2 0.2] \
+                  \"rgb sigma_s\" [1.5 1 0.5] \"float g\" [0.4]";
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "scene.pbrt", &sphere_of(medium));
+    let d = |n: &str| dir.path().join(n);
+    let run = |out: &str, extra: &[&str]| {
+        let mut args = vec![path_str(&scene), "-o", path_str(&d(out))];
+        args.extend_from_slice(&["--global-photons", "20000"]);
+        args.extend_from_slice(extra);
+        dpm::render::pipeline::run(&render_args(&args)).unwrap()
+    };
+    let whole = run("whole.pfm", &["--passes", "4"]);
+    let (a, b) = (d("a.film"), d("b.film"));
+    run("a.pfm", &["--passes", "2", "--film", path_str(&a)]);
+    run(
+        "b.pfm",
+        &["--first-pass", "2", "--passes", "2", "--film", path_str(&b)],
+    );
+    let merge = dpm::render::merge::MergeArgs {
+        films: vec![b.clone(), a.clone()],
+        output: d("merged.pfm"),
+        film: None,
+        expect: None,
+        exposure: 0.0,
+        kernel_field: None,
+    };
+    let merged = dpm::render::merge::run(&merge).unwrap();
+    assert!(max_relative_difference(whole.film.sums(), merged.film.sums()) <= 1e-6);
+    let resumed = run("r.pfm", &["--resume", path_str(&a), "--passes", "2"]);
+    assert!(max_relative_difference(whole.film.sums(), resumed.film.sums()) <= 1e-6);
+}

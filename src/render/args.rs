@@ -59,8 +59,8 @@ pub struct RenderArgs {
     /// Refuse a pbrt material dpm can only approximate instead of mapping it with a warning.
     ///
     /// Oren–Nayar `matte` (rendered as Lambert), pbrt-v4's `coatedconductor` and coated layers
-    /// with a scattering medium, a `mix` of colour-varying amount, shapes that only bound a
-    /// medium: without --strict dpm renders its approximation and says so once.
+    /// with a scattering medium, a `mix` of colour-varying amount: without --strict dpm renders
+    /// its approximation and says so once.
     #[arg(long, help_heading = headings::OUTPUT)]
     pub strict: bool,
 

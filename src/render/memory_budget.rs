@@ -24,6 +24,12 @@ pub const GRADIENT_BYTES: u64 = 12;
 /// place in the map that shapes the kernels, gradient field included (90 at most, the bound of
 /// `PhotonMap::bytes_per_photon`'s test).
 pub const HISTORY_BYTES: u64 = 20 + 90;
+/// Bytes a stored photon may cost in a scene with media, where any of them may be a volume
+/// photon: its traced record (32) kept until the pass's maps are split, the volume photon (36)
+/// and its radius (4) twice (built, then ordered for the ray query), the positions and kd-tree
+/// its radius is found with (12 + 16) and its share of the query's nodes (8). 54.5 bytes a
+/// photon were measured for the built maps of pbrt's cloud scene.
+pub const VOLUME_BYTES_PER_PHOTON: u64 = 32 + 2 * (36 + 4) + 12 + 16 + 8;
 /// Bytes a pixel costs: the film's f64 sums (15 channels), one pass's f32 values, the resolved
 /// image, its checked copy and the encoded file in memory.
 pub const BYTES_PER_PIXEL: u64 = 240;
@@ -107,7 +113,15 @@ pub(super) fn check_memory(
     let diffusion = (estimator.estimator == EstimatorKind::Diffusion)
         .then_some((estimator.history_photons).passes_kept(estimator.tensor_history));
     let (width, height) = camera.image_size();
-    let needed = memory_estimate(&peak, diffusion, width, height);
+    let mut needed = memory_estimate(&peak, diffusion, width, height);
+    if let Some(media) = &world.media {
+        // Any photon may be a volume photon, and the media's grids are held throughout.
+        let photons: u64 = peak.iter().map(|p| p.target).sum();
+        let extra = VOLUME_BYTES_PER_PHOTON.saturating_sub(BYTES_PER_PHOTON);
+        needed = needed
+            .saturating_add(photons.saturating_mul(extra))
+            .saturating_add(media.bytes() as u64);
+    }
     let (available, source) = available_memory();
     if needed <= available {
         return Ok(());
@@ -124,12 +138,22 @@ pub(super) fn check_memory(
         })
         .collect();
     what.push(format!("a {}x{} image (camera.resolution)", width, height));
+    if let Some(media) = &world.media {
+        what.push(format!(
+            "the media's grids ({})",
+            human_bytes(media.bytes() as u64)
+        ));
+    }
     Err(RenderError::Invalid(format!(
         "{} would need about {} of memory ({} bytes a photon{}, {BYTES_PER_PIXEL} a pixel), but \
          only {} is available ({source}); lower the photon counts or the resolution",
         what.join(", "),
         human_bytes(needed),
-        BYTES_PER_PHOTON,
+        if world.media.is_some() {
+            VOLUME_BYTES_PER_PHOTON
+        } else {
+            BYTES_PER_PHOTON
+        },
         match diffusion {
             Some(history) => format!(
                 ", {} a caustic photon with its gradient and {history:.2} passes' worth of tensor history",
