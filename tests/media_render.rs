@@ -248,7 +248,8 @@ fn films_of_a_media_scene_merge_and_resume_into_one_runs_image() {
     let scene = write_scene(dir.path(), "scene.pbrt", &sphere_of(medium));
     let d = |n: &str| dir.path().join(n);
     let run = |out: &str, extra: &[&str]| {
-        let mut args = vec![path_str(&scene), "-o", path_str(&d(out))];
+        let out = d(out);
+        let mut args = vec![path_str(&scene), "-o", path_str(&out)];
         args.extend_from_slice(&["--global-photons", "20000"]);
         args.extend_from_slice(extra);
         dpm::render::pipeline::run(&render_args(&args)).unwrap()

@@ -224,7 +224,7 @@ impl Mapper<'_> {
             "subsurface" | "kdsubsurface" => {
                 return Err(at.error(
                     "Material",
-                    format!("material \"{kind}\" scatters light in a participating medium under the surface, and dpm has no media; use glass or a diffuse material"),
+                    format!("material \"{kind}\" scatters light in a medium under the surface, which dpm does not render yet; use glass (with a MediumInterface inside it) or a diffuse material"),
                 ));
             }
             "disney" => {
@@ -236,7 +236,7 @@ impl Mapper<'_> {
             "interface" | "" | "none" => {
                 return Err(at.error(
                     "Material",
-                    format!("material \"{kind}\" (a medium boundary) is not supported: dpm has no participating media"),
+                    format!("material \"{kind}\" only bounds a medium: an area light or a mix cannot take it"),
                 ));
             }
             other => {
