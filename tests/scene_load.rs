@@ -107,6 +107,7 @@ fn every_scene_in_scenes_loads() {
         [
             "cornell-box.toml",
             "cornell-point.toml",
+            "fog-caustic.toml",
             "metal-ring.toml",
             "point-plane.toml",
             "spot-and-sky.toml",
