@@ -4,7 +4,8 @@
 //! (specular or nearly so, as a mirror scatters it), chosen by their weights, with Russian
 //! roulette by the sample's weight. Part of the tracer ([`super::tracer`]); must not trace.
 
-use super::tracer::{LivePath, MapKind, TracedPhoton, store_photon};
+use super::path::{LivePath, MapKind, store_photon};
+use super::traced::TracedPhoton;
 use crate::bsdf::{Bsdf, Part};
 use crate::sampling::Frame;
 use crate::world::Interaction;

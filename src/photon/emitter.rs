@@ -3,13 +3,11 @@
 //! often than their size alone would for the global map), each path from its own random
 //! stream. Owns those choices; must not follow paths.
 
-use crate::sampling::{Rng, Stream, StreamSeed};
-use crate::scene::MediumId;
+use crate::sampling::{Stream, StreamSeed};
 use crate::world::lights::{self, Emission, LightEmitter};
 use crate::world::{BoundingSphere, World};
-use glam::Vec3;
 
-use super::tracer::MapKind;
+use super::path::{MapKind, PathStart};
 
 /// The share of the global photons from lights at infinity that start on the disc of the
 /// media's bounds (the rest over the whole scene): a cloud far smaller than its scene would
@@ -60,18 +58,6 @@ pub(super) struct Emitter<'w> {
     lights: Vec<LightEmitter>,
     streams: StreamSeed,
     ray_epsilon: f32,
-}
-
-/// The start of a path that carries flux.
-pub(super) struct PathStart {
-    /// The light it left, in the scene's order.
-    pub(super) light: usize,
-    pub(super) rng: Rng,
-    pub(super) origin: Vec3,
-    pub(super) direction: Vec3,
-    pub(super) flux: Vec3,
-    /// The medium the light sits in.
-    pub(super) medium: Option<MediumId>,
 }
 
 impl<'w> Emitter<'w> {

@@ -2,8 +2,8 @@
 //! where it goes on. Part of the tracer (`tracer`), as `bsdf_scatter` is for BSDF surfaces.
 
 use super::EncodedDirections;
+use super::path::{LivePath, MapKind, bounce_limit};
 use super::traced::{IN_VOLUME, TracedPhoton};
-use super::tracer::{LivePath, MapKind, bounce_limit};
 use crate::scene::MediumId;
 use crate::world::World;
 use glam::Vec3;

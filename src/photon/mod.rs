@@ -9,6 +9,7 @@ pub mod guide;
 pub mod kdtree;
 pub mod map;
 mod medium_scatter;
+mod path;
 pub mod record;
 pub mod store;
 pub mod traced;

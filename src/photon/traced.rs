@@ -3,11 +3,17 @@
 //! divided by the paths emitted. Owns that buffer and its split into the surface map and the
 //! volume photons; must not trace.
 
-use super::tracer::TraceCounts;
 use super::volume::VolumePhoton;
 use super::{EncodedDirections, Photon, PhotonAttributes, PhotonMap};
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// What a pass did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraceCounts {
+    pub emitted: u64,
+    pub stored: u64,
+}
 
 /// Set in a traced photon's `path_in_chunk` when it was left in a medium (a volume photon).
 pub(super) const IN_VOLUME: u32 = 1 << 31;

@@ -7,43 +7,25 @@
 //! Determinism: path `i` draws only from `Rng::for_index(seed, stream, i)` and paths are kept in
 //! index order, so the maps are identical whatever the thread count.
 
-pub(super) use super::emitter::{Emitter, PathStart};
+use super::PhotonMap;
+pub(super) use super::emitter::Emitter;
 use super::medium_scatter::scatter_in_medium;
+pub use super::path::MapKind;
+pub(super) use super::path::{LivePath, bounce_limit, store_photon};
 use super::traced::IN_VOLUME;
+pub use super::traced::TraceCounts;
 pub(super) use super::traced::TracedPhoton;
 pub use super::traced::TracedPhotons;
 use super::volume::VolumePhoton;
-use super::{EncodedDirections, PhotonMap};
 use crate::optics::{reflect, scatter_dielectric};
 use crate::sampling::{Rng, cosine_hemisphere};
 use crate::scene::Material;
-use crate::scene::MediumId;
 use crate::world::aim::UnionOfCones;
 use crate::world::participating::Flight;
 use crate::world::{ClosestHit, SHADING_AGREEMENT_MIN_COS, Surface, World};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
-
-/// Which map a tracing pass fills.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MapKind {
-    /// Light → specular+ → diffuse. Paths end at their first diffuse hit.
-    Caustic,
-    /// Photons on diffuse surfaces after at least one diffuse bounce (`with_direct`: every
-    /// diffuse hit, as final gathering needs).
-    Global { with_direct: bool },
-}
-
-/// What a pass did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraceCounts {
-    pub emitted: u64,
-    pub stored: u64,
-}
-
-/// Paths longer than this are cut: a photon trapped between mirrors must not loop forever.
-const MAX_BOUNCES: u32 = 32;
 
 /// The first ray (origin, unit direction) of each path in `paths`, drawn exactly as
 /// [`trace_photons`] draws it (same lights, same aim, same random numbers), for timing Embree
@@ -293,36 +275,6 @@ pub fn path_rays(
     rays
 }
 
-/// A path on its way: its next ray and what it carries.
-pub(super) struct LivePath {
-    pub(super) path_in_chunk: u32,
-    pub(super) rng: Rng,
-    pub(super) origin: Vec3,
-    pub(super) direction: Vec3,
-    pub(super) flux: Vec3,
-    pub(super) bounces: u32,
-    pub(super) specular_seen: bool,
-    /// Whether the path has bounced off a diffuse surface or scattered in a medium.
-    pub(super) diffuse_seen: bool,
-    pub(super) medium: Option<MediumId>,
-}
-
-impl LivePath {
-    pub(super) fn new(path_in_chunk: u32, start: PathStart) -> Self {
-        Self {
-            path_in_chunk,
-            rng: start.rng,
-            origin: start.origin,
-            direction: start.direction,
-            flux: start.flux,
-            bounces: 0,
-            specular_seen: false,
-            diffuse_seen: false,
-            medium: start.medium,
-        }
-    }
-}
-
 /// Follows one path until it ends, appending the photons it stores to `stored`; returns the
 /// number of rays cast.
 pub(super) fn trace_path(
@@ -466,16 +418,6 @@ fn advance(
     path.bounces < bounce_limit(world)
 }
 
-/// Surfaces a path may meet: the tracer's own limit, or fewer where the scene caps paths
-/// (a photon stored on its k-th surface has met k − 1 before it).
-#[inline(always)]
-pub(super) fn bounce_limit(world: &World) -> u32 {
-    match world.description.transport.photon_bounces() {
-        Some(cap) => MAX_BOUNCES.min(cap + 1),
-        None => MAX_BOUNCES,
-    }
-}
-
 /// A Lambert bounce off `position` (unit normal `ns` on the side the photon came from): the
 /// direction and its weight cos θ/(π·pdf). Drawn by the cosine, or with probability
 /// [`World::diffuse_bounce_aim`] towards the caustic targets (uniformly over their cones),
@@ -501,32 +443,6 @@ fn diffuse_bounce(world: &World, position: Vec3, ns: Vec3, rng: &mut Rng) -> Opt
     }
     let pdf = aim * cones.density(next) + (1.0 - aim) * cos * std::f32::consts::FRAC_1_PI;
     Some((next, cos * std::f32::consts::FRAC_1_PI / pdf))
-}
-
-/// Leaves the path's photon at a diffuse landing (`position`, arriving along `d` on the side
-/// of `ns`) when its map keeps such paths: the caustic map those that met a mirror, glass or
-/// glossy lobe first, the global map those past a diffuse bounce (or all, `with_direct`).
-#[inline(always)]
-pub(super) fn store_photon(
-    kind: MapKind,
-    path: &LivePath,
-    position: Vec3,
-    d: Vec3,
-    ns: Vec3,
-    stored: &mut Vec<TracedPhoton>,
-) {
-    let store = match kind {
-        MapKind::Caustic => path.specular_seen,
-        MapKind::Global { with_direct } => path.diffuse_seen || with_direct,
-    };
-    if store {
-        stored.push(TracedPhoton {
-            position,
-            flux: path.flux,
-            directions: EncodedDirections::new(d, ns),
-            path_in_chunk: path.path_in_chunk,
-        });
-    }
 }
 
 /// Whether a mirror's or glass's tint has left a path nothing to carry.

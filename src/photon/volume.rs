@@ -18,6 +18,15 @@ pub struct VolumePhoton {
     pub direction: Vec3,
 }
 
+/// The volume photon maps a pass reads along camera segments in media.
+#[derive(Clone, Copy, Default)]
+pub struct VolumeMaps<'a> {
+    /// Photons whose first scattering event came after mirrors and glass alone.
+    pub caustic: Option<&'a VolumeMap>,
+    /// Photons that scattered or bounced off a diffuse surface before.
+    pub global: Option<&'a VolumeMap>,
+}
+
 /// Photons a leaf holds at most.
 const LEAF: usize = 8;
 

@@ -7,12 +7,12 @@
 //! [`PathSampler`]. Owns shading; must not build maps or write images.
 
 use super::gather::Reception;
-use super::volume_shading::VolumeMaps;
 use crate::bsdf::Part;
 use crate::estimate::precomputed::ShownIrradiance;
 use crate::estimate::{KnnEstimate, PrecomputedIrradiance, Query, RadianceEstimate, Scratch};
 use crate::optics::{fresnel_dielectric, reflect, refract, scatter_dielectric};
 use crate::photon::PhotonMap;
+use crate::photon::volume::VolumeMaps;
 use crate::sampling::{Frame, PathSampler};
 use crate::scene::Material;
 use crate::scene::MediumId;

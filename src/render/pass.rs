@@ -27,7 +27,6 @@ use super::kernel_probe::KernelProbe;
 use super::light_images::Aim;
 use super::pilots::PixelPlan;
 use super::schedule::{PhotonGrowth, Schedule, pass_estimator};
-use super::volume_shading::VolumeMaps;
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::diffusion::shaped::ShapedBy;
 use crate::estimate::kernel::RadialKernel;
@@ -40,7 +39,7 @@ use crate::estimate::{
 };
 use crate::photon::PhotonMap;
 use crate::photon::tracer::{MapKind, TraceCounts, trace_map_within};
-use crate::photon::volume::{VolumeMap, VolumePhoton};
+use crate::photon::volume::{VolumeMap, VolumeMaps, VolumePhoton};
 use crate::sampling::PathSampler;
 use crate::scene::Transport;
 use crate::timing::{PhaseTimes, progress};

@@ -10,21 +10,11 @@ use super::integrator::{Integrator, Radiance};
 use crate::estimate::{Scratch, beam};
 use crate::media::FreeFlight;
 use crate::media::equiangular::{equiangular, within_cone};
-use crate::photon::volume::VolumeMap;
 use crate::sampling::PathSampler;
 use crate::scene::MediumId;
 use crate::world::Interaction;
 use crate::world::lights::LightSource;
 use glam::Vec3;
-
-/// The volume photon maps a pass reads along camera segments in media.
-#[derive(Clone, Copy, Default)]
-pub struct VolumeMaps<'a> {
-    /// Photons whose first scattering event came after mirrors and glass alone.
-    pub caustic: Option<&'a VolumeMap>,
-    /// Photons that scattered or bounced off a diffuse surface before.
-    pub global: Option<&'a VolumeMap>,
-}
 
 /// What a camera segment through media brings: the light scattered towards its start, what
 /// it lets through from its end, and the medium at its end.
