@@ -254,7 +254,25 @@ fn films_of_a_media_scene_merge_and_resume_into_one_runs_image() {
         args.extend_from_slice(extra);
         dpm::render::pipeline::run(&render_args(&args)).unwrap()
     };
-    let whole = run("whole.pfm", &["--passes", "4"]);
+    let stats = d("stats.json");
+    let whole = run("whole.pfm", &["--passes", "4", "--stats", path_str(&stats)]);
+    // The media's and the volume maps' memory are reported, in the outcome and the stats.
+    let text = std::fs::read_to_string(&stats).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(
+        json["media_bytes"].as_u64().is_some_and(|b| b > 0),
+        "{text}"
+    );
+    assert!(
+        json["volume_maps"]["photons"]
+            .as_u64()
+            .is_some_and(|n| n > 0),
+        "{text}"
+    );
+    assert_eq!(
+        whole.media_bytes,
+        json["media_bytes"].as_u64().map(|b| b as usize)
+    );
     let (a, b) = (d("a.film"), d("b.film"));
     run("a.pfm", &["--passes", "2", "--film", path_str(&a)]);
     run(

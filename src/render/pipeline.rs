@@ -287,9 +287,13 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
     let ran = passes.run(start, &mut times)?;
     let film_path = passes.film_path;
     let media_bytes = world.media.as_ref().map(|m| m.bytes());
-    let mut outcome = finish(args, output, film_path.as_deref(), ran, times)?;
-    outcome.media_bytes = media_bytes;
-    Ok(outcome)
+    finish(
+        args,
+        output,
+        film_path.as_deref(),
+        ran,
+        (times, media_bytes),
+    )
 }
 
 /// Writes what the complete passes hold (the image, the film, the kernel field, the stats)
@@ -299,7 +303,7 @@ fn finish(
     output: PathBuf,
     film_path: Option<&Path>,
     ran: LoopOutcome,
-    mut times: PhaseTimes,
+    (mut times, media_bytes): (PhaseTimes, Option<usize>),
 ) -> Result<RenderOutcome, RenderError> {
     let Some(film) = ran.film.filter(|f| !f.passes().is_empty()) else {
         return Err(RenderError::Interrupted {
@@ -322,7 +326,7 @@ fn finish(
         global: last.and_then(|r| r.global),
         estimator: last.and_then(|r| r.estimator.clone()),
         volume_maps: last.and_then(|r| r.volume_maps),
-        media_bytes: None,
+        media_bytes,
         passes: ran.records,
         interrupted: ran.interrupted,
         budget_note: ran.budget_note,
