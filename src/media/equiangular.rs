@@ -24,7 +24,8 @@ pub fn equiangular(
     let (a, b) = (((t0 - delta) / h).atan(), ((t1 - delta) / h).atan());
     let theta = a + u * (b - a);
     let t = (delta + h * theta.tan()).clamp(t0, t1);
-    (pdf(delta, h, (a, b), t) > 0.0).then(|| (t, pdf(delta, h, (a, b), t)))
+    let density = pdf(delta, h, (a, b), t);
+    (density > 0.0).then_some((t, density))
 }
 
 /// The density [`equiangular`] gives `t`.

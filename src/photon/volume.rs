@@ -97,26 +97,12 @@ impl VolumeMap {
         }
     }
 
-    /// The same photons with every radius multiplied by `scale` (a later pass's).
-    pub fn scaled(&self, scale: f32) -> Self {
-        let radii = self.radii.iter().map(|r| r * scale).collect();
-        Self::with_radii(self.photons.clone(), radii)
-    }
-
     pub fn len(&self) -> usize {
         self.photons.len()
     }
 
     pub fn is_empty(&self) -> bool {
         self.photons.is_empty()
-    }
-
-    pub fn photons(&self) -> &[VolumePhoton] {
-        &self.photons
-    }
-
-    pub fn radii(&self) -> &[f32] {
-        &self.radii
     }
 
     /// Bytes held.
@@ -232,4 +218,51 @@ fn build_node(
     nodes[index as usize].count = 0;
     nodes[index as usize].first = second;
     index
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{Stream, StreamSeed};
+
+    #[test]
+    fn a_ray_finds_every_photon_whose_sphere_it_passes_through_as_brute_force_does() {
+        let mut rng = StreamSeed::new(9, Stream::GlobalPhotons).rng(0);
+        let mut point = |scale: f32| {
+            Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * scale - scale / 2.0
+        };
+        let photons: Vec<VolumePhoton> = (0..3000)
+            .map(|i| VolumePhoton {
+                position: point(2.0),
+                // Its index, to name it by.
+                power: Vec3::splat(i as f32),
+                direction: Vec3::X,
+            })
+            .collect();
+        let radii: Vec<f32> = (0..photons.len())
+            .map(|i| 0.01 + 0.002 * (i % 50) as f32)
+            .collect();
+        let map = VolumeMap::with_radii(photons, radii);
+        for case in 0..200 {
+            let origin = point(4.0);
+            let dir = (point(2.0) - origin).normalize();
+            let (t0, t1) = (0.3, 0.3 + 3.0 * (case % 4 + 1) as f32 / 4.0);
+            let mut found: Vec<(u32, f32)> = Vec::new();
+            map.along(origin, dir, t0, t1, |on| {
+                found.push((on.photon.power.x as u32, on.distance2));
+            });
+            let mut want: Vec<(u32, f32)> = Vec::new();
+            for (p, r) in map.photons.iter().zip(&map.radii) {
+                let to = p.position - origin;
+                let t = to.dot(dir);
+                let d2 = (to - t * dir).length_squared();
+                if (t0..t1).contains(&t) && d2 < r * r {
+                    want.push((p.power.x as u32, d2));
+                }
+            }
+            found.sort_by_key(|f| f.0);
+            want.sort_by_key(|f| f.0);
+            assert_eq!(found, want, "ray {case}");
+        }
+    }
 }

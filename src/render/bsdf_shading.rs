@@ -234,8 +234,15 @@ impl Integrator<'_> {
             return Radiance::default();
         }
         if self.world.media.is_some() {
-            // Through media the sample goes on as a camera ray does.
-            return weight * self.trace(origin, next, medium, depth + 1, after, sampler, scratch);
+            // Through media the sample goes on as a camera ray does, to the surface found.
+            let through =
+                self.through_media(origin, next, found.t, medium, depth + 1, sampler, scratch);
+            if through.transmittance == Vec3::ZERO {
+                return weight * through.in_scattered;
+            }
+            let end = through.medium_at_end;
+            let seen = self.shade(&found, next, end, depth + 1, after, sampler, scratch);
+            return weight * (through.in_scattered + through.transmittance * seen);
         }
         weight * self.shade(&found, next, None, depth + 1, after, sampler, scratch)
     }

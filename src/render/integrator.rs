@@ -353,11 +353,8 @@ impl Integrator<'_> {
         let mut medium = self.world.media.as_ref().and_then(|m| m.camera());
         for _ in 0..=self.max_depth {
             let hit = self.world.intersect(origin, dir, 0.0, f32::INFINITY);
-            if let Some(media) = &self.world.media {
-                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                throughput *= media.transmittance((origin, dir), t_max, medium, rng);
-                medium = media.medium_at(origin, dir, t_max, medium);
-            }
+            let (tr, end) = self.across_media((origin, dir), hit.as_ref(), medium, rng);
+            (throughput, medium) = (throughput * tr, end);
             let Some(hit) = hit else {
                 return throughput * self.world.background(dir);
             };
@@ -408,11 +405,8 @@ impl Integrator<'_> {
             // chain, which the forced strategy never samples.
             let early = forced.is_some() && bounce < bounces;
             let hit = self.world.intersect(origin, dir, 0.0, f32::INFINITY);
-            if let Some(media) = &self.world.media {
-                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                throughput *= media.transmittance((origin, dir), t_max, medium, rng);
-                medium = media.medium_at(origin, dir, t_max, medium);
-            }
+            let (tr, end) = self.across_media((origin, dir), hit.as_ref(), medium, rng);
+            (throughput, medium) = (throughput * tr, end);
             if early
                 && hit
                     .as_ref()

@@ -65,6 +65,21 @@ impl Integrator<'_> {
         }
     }
 
+    /// What the media let through along `ray` up to `hit` (or to infinity), and the medium
+    /// there: the emitted light seen along a specular chain is dimmed by it (1 without media).
+    pub(super) fn across_media(
+        &self,
+        ray: (Vec3, Vec3),
+        hit: Option<&Interaction>,
+        medium: Option<MediumId>,
+        rng: &mut crate::sampling::Rng,
+    ) -> (Vec3, Option<MediumId>) {
+        match &self.world.media {
+            None => (Vec3::ONE, medium),
+            Some(media) => media.across(ray, hit.map_or(f32::INFINITY, |h| h.t), medium, rng),
+        }
+    }
+
     /// The segment `origin + t·dir`, t from 0 to `t_max` (the first surface, or infinity),
     /// starting in `medium`, on an eye path `depth` bounces from the camera: a scattering
     /// point there is that path's next vertex, lit by the lights and read from the maps as

@@ -183,37 +183,48 @@ impl Participating {
         Some(medium)
     }
 
-    /// The medium at `t_max` along the ray, `medium` at its start.
-    pub fn medium_at(
+    /// What the media let through along the ray `origin + t·dir` from 0 to `t_max` (surfaces
+    /// that scatter are the caller's to test).
+    pub fn transmittance(
         &self,
-        origin: Vec3,
-        dir: Vec3,
+        ray: (Vec3, Vec3),
         t_max: f32,
         medium: Option<MediumId>,
-    ) -> Option<MediumId> {
-        if self.boundaries.is_none() {
-            return medium;
-        }
-        self.walk(origin, dir, t_max, medium, |_| true).flatten()
+        rng: &mut Rng,
+    ) -> Vec3 {
+        self.attenuate(ray, t_max, medium, rng, true).0
     }
 
-    /// What the media let through along the ray `origin + t·dir` from 0 to `t_max` (surfaces that
-    /// scatter are the caller's to test).
-    pub fn transmittance(
+    /// [`Participating::transmittance`], and the medium at `t_max`.
+    pub fn across(
+        &self,
+        ray: (Vec3, Vec3),
+        t_max: f32,
+        medium: Option<MediumId>,
+        rng: &mut Rng,
+    ) -> (Vec3, Option<MediumId>) {
+        let (tr, end) = self.attenuate(ray, t_max, medium, rng, false);
+        (tr, end.flatten())
+    }
+
+    /// The transmittance along the ray and, unless the walk stopped where it went dark
+    /// (`stop_when_dark`), the medium at `t_max`. Past a dark stretch nothing more is tracked.
+    fn attenuate(
         &self,
         (origin, dir): (Vec3, Vec3),
         t_max: f32,
         medium: Option<MediumId>,
         rng: &mut Rng,
-    ) -> Vec3 {
+        stop_when_dark: bool,
+    ) -> (Vec3, Option<Option<MediumId>>) {
         let mut tr = Vec3::ONE;
-        self.walk(origin, dir, t_max, medium, |s| {
-            tr *= self
-                .medium(s.medium)
-                .transmittance(origin, dir, s.t0, s.t1, rng);
-            tr.max_element() > 0.0
+        let end = self.walk(origin, dir, t_max, medium, |s| {
+            if tr.max_element() > 0.0 {
+                tr *= (self.medium(s.medium)).transmittance(origin, dir, s.t0, s.t1, rng);
+            }
+            !stop_when_dark || tr.max_element() > 0.0
         });
-        tr
+        (tr, end)
     }
 
     /// A flight along `origin + t·dir` up to `t_max`: the first scattering event in any
