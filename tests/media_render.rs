@@ -292,3 +292,45 @@ fn films_of_a_media_scene_merge_and_resume_into_one_runs_image() {
     let resumed = run("r.pfm", &["--resume", path_str(&a), "--passes", "2"]);
     assert!(max_relative_difference(whole.film.sums(), resumed.film.sums()) <= 1e-6);
 }
+
+#[test]
+fn a_glossy_surface_in_an_absorbing_medium_sees_the_sky_dimmed_by_it() {
+    // A rough metal ball at the centre of a sphere of absorbing fog (radius 10), the camera
+    // in the fog 2.5 from the ball: the sky reflected back to the camera crosses 2.5 and about
+    // 9.5 of fog, whether the glossy lobe found it by a shadow ray or by its own sample.
+    let scene = |sigma: f32| {
+        format!(
+            "LookAt 0 0 3  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [20]\n\
+             Film \"image\" \"integer xresolution\" [32] \"integer yresolution\" [32]\n\
+             WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n\
+             MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \
+             \"rgb sigma_a\" [{sigma} {sigma} {sigma}] \"rgb sigma_s\" [0 0 0]\n\
+             AttributeBegin\nMediumInterface \"fog\" \"\"\nMaterial \"\"\n\
+             Shape \"sphere\" \"float radius\" [10]\nAttributeEnd\n\
+             AttributeBegin\nMediumInterface \"fog\" \"fog\"\n\
+             Material \"metal\" \"float roughness\" [0.05]\n\
+             Shape \"sphere\" \"float radius\" [0.5]\nAttributeEnd\n\
+             MediumInterface \"\" \"fog\"\nWorldEnd\n"
+        )
+    };
+    let args = [
+        "--passes",
+        "4",
+        "--spp",
+        "16",
+        "--caustic-photons",
+        "0",
+        "--global-photons",
+        "0",
+    ];
+    let clear = mean(&render(&scene(0.0), &args), 14, 18);
+    let dimmed = mean(&render(&scene(0.02), &args), 14, 18);
+    let want = (-0.02f32 * (2.5 + 9.5)).exp();
+    for c in 0..3 {
+        let ratio = dimmed[c] / clear[c];
+        assert!(
+            (ratio / want - 1.0).abs() < 0.015,
+            "channel {c}: {ratio} against {want}"
+        );
+    }
+}

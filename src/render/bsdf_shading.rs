@@ -200,7 +200,19 @@ impl Integrator<'_> {
             None => 1.0,
         };
         let from = from.unwrap_or(at.p);
-        let Some(found) = self.world.intersect(origin, next, 0.0, f32::INFINITY) else {
+        let found = self.world.intersect(origin, next, 0.0, f32::INFINITY);
+        // Through media the sample goes on as a camera ray does: what lies at its end is
+        // dimmed, and the light scattered towards the surface along the way is added.
+        let through = (self.world.media.is_some()).then(|| {
+            let t_max = found.as_ref().map_or(f32::INFINITY, |f| f.t);
+            self.through_media(origin, next, t_max, medium, depth + 1, sampler, scratch)
+        });
+        // `end`: what the sample sees at its end, already times its weight.
+        let seen_through = |end: Radiance| match &through {
+            None => end,
+            Some(t) => weight * t.in_scattered + t.transmittance * end,
+        };
+        let Some(found) = found else {
             let mut sky = Vec3::ZERO;
             if lit {
                 for light in &self.world.light_sources {
@@ -212,39 +224,35 @@ impl Integrator<'_> {
                     }
                 }
             }
-            return Radiance {
+            return seen_through(Radiance {
                 direct: weight * sky,
                 ..Radiance::default()
-            };
+            });
         };
         if let Surface::Light(l) = found.surface {
             if !lit {
-                return Radiance::default();
+                return seen_through(Radiance::default());
             }
             let light = &self.world.light_sources[l];
             let emitted = light.emitted_radiance(-next.dot(found.geometric_normal));
             let light_pdf = light.incident_pdf(from, facing, next, found.t, found.geometric_normal);
-            return Radiance {
+            return seen_through(Radiance {
                 direct: weight * emitted * mis(light_pdf, light),
                 ..Radiance::default()
-            };
+            });
         }
         if !self.world.description.transport.glossy_sees_surfaces() {
             // pbrt's direct lighting: a glossy lobe sees lights, not what they light.
-            return Radiance::default();
+            return seen_through(Radiance::default());
         }
-        if self.world.media.is_some() {
-            // Through media the sample goes on as a camera ray does, to the surface found.
-            let through =
-                self.through_media(origin, next, found.t, medium, depth + 1, sampler, scratch);
-            if through.transmittance == Vec3::ZERO {
-                return weight * through.in_scattered;
-            }
-            let end = through.medium_at_end;
-            let seen = self.shade(&found, next, end, depth + 1, after, sampler, scratch);
-            return weight * (through.in_scattered + through.transmittance * seen);
+        let end = through.as_ref().and_then(|t| t.medium_at_end);
+        if through
+            .as_ref()
+            .is_some_and(|t| t.transmittance == Vec3::ZERO)
+        {
+            return seen_through(Radiance::default());
         }
-        weight * self.shade(&found, next, None, depth + 1, after, sampler, scratch)
+        seen_through(weight * self.shade(&found, next, end, depth + 1, after, sampler, scratch))
     }
 
     /// Shadow rays a light takes at each hit.
