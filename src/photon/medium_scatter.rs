@@ -2,7 +2,7 @@
 //! where it goes on. Part of the tracer (`tracer`), as `bsdf_scatter` is for BSDF surfaces.
 
 use super::EncodedDirections;
-use super::path::{LivePath, MapKind, bounce_limit};
+use super::path::{LivePath, MAX_WALK_EVENTS, MapKind, bounce_limit};
 use super::traced::{IN_VOLUME, TracedPhoton};
 use crate::scene::MediumId;
 use crate::world::World;
@@ -13,7 +13,10 @@ use glam::Vec3;
 /// caustic's first event after mirrors and glass in the caustic map; any event after a
 /// diffuse bounce or an earlier event in the global map; single scattering straight from
 /// the light is the eye pass's own, by next-event estimation), then scatters by the phase
-/// function under Russian roulette. Returns whether the path goes on.
+/// function under Russian roulette. Under a subsurface surface the whole walk is the
+/// surface's own transport, as a glass's refraction is: every event is kept in the map the
+/// path's entry chose (the caustic pass's walks go on), none counts as a bounce or makes the
+/// path diffuse. Returns whether the path goes on.
 pub(super) fn scatter_in_medium(
     world: &World,
     kind: MapKind,
@@ -41,7 +44,8 @@ pub(super) fn scatter_in_medium(
             path_in_chunk: path.path_in_chunk | IN_VOLUME,
         });
     }
-    if kind == MapKind::Caustic {
+    let walk = media.is_subsurface(medium);
+    if kind == MapKind::Caustic && !walk {
         return false;
     }
     let survive = weight.max_element().min(1.0);
@@ -49,7 +53,7 @@ pub(super) fn scatter_in_medium(
         return false;
     }
     path.flux = scattered / survive;
-    path.diffuse_seen = true;
+    path.diffuse_seen |= !walk;
     path.medium = Some(medium);
     path.origin = position;
     path.direction = media
@@ -57,6 +61,10 @@ pub(super) fn scatter_in_medium(
         .phase()
         .sample(-d, path.rng.next_2d())
         .0;
+    if walk {
+        path.walk_events += 1;
+        return path.walk_events < MAX_WALK_EVENTS;
+    }
     path.bounces += 1;
     path.bounces < bounce_limit(world)
 }

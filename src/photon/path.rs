@@ -23,6 +23,10 @@ pub enum MapKind {
 /// Paths longer than this are cut: a photon trapped between mirrors must not loop forever.
 const MAX_BOUNCES: u32 = 32;
 
+/// Scattering events a walk under one subsurface surface may take (they count as no bounce):
+/// Russian roulette ends nearly all walks long before, even at albedo 0.999.
+pub(super) const MAX_WALK_EVENTS: u32 = 4096;
+
 /// The start of a path that carries flux.
 pub(super) struct PathStart {
     /// The light it left, in the scene's order.
@@ -43,8 +47,11 @@ pub(super) struct LivePath {
     pub(super) direction: Vec3,
     pub(super) flux: Vec3,
     pub(super) bounces: u32,
+    /// Events of its walks under subsurface surfaces.
+    pub(super) walk_events: u32,
     pub(super) specular_seen: bool,
-    /// Whether the path has bounced off a diffuse surface or scattered in a medium.
+    /// Whether the path has bounced off a diffuse surface or scattered in a medium (other
+    /// than under a subsurface surface, whose walk counts as the surface's own transport).
     pub(super) diffuse_seen: bool,
     pub(super) medium: Option<MediumId>,
 }
@@ -58,6 +65,7 @@ impl LivePath {
             direction: start.direction,
             flux: start.flux,
             bounces: 0,
+            walk_events: 0,
             specular_seen: false,
             diffuse_seen: false,
             medium: start.medium,

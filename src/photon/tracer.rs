@@ -10,6 +10,7 @@
 use super::PhotonMap;
 pub(super) use super::emitter::Emitter;
 use super::medium_scatter::scatter_in_medium;
+use super::path::MAX_WALK_EVENTS;
 pub use super::path::MapKind;
 pub(super) use super::path::{LivePath, bounce_limit, store_photon};
 use super::traced::IN_VOLUME;
@@ -406,7 +407,17 @@ fn advance(
         // A tint took everything: nothing left to store.
         return false;
     }
-    path.bounces += 1;
+    // Meeting a subsurface surface from under it (reflected back in, or leaving) is part of
+    // the walk there, as pbrt's BSSRDF takes entry to exit as one bounce.
+    let walking = match (&world.media, path.medium) {
+        (Some(media), Some(medium)) => media.is_subsurface(medium),
+        _ => false,
+    };
+    if walking {
+        path.walk_events += 1;
+    } else {
+        path.bounces += 1;
+    }
     if let Some(media) = &world.media {
         let normal = hit.geometric_normal;
         path.medium = media.after_surface(hit.geometry, hit.instance, normal, next, path.medium);
@@ -415,7 +426,7 @@ fn advance(
     let side = if next.dot(ng) >= 0.0 { ng } else { -ng };
     path.origin = world.offset_from(&hit, side);
     path.direction = next;
-    path.bounces < bounce_limit(world)
+    path.bounces < bounce_limit(world) && path.walk_events < MAX_WALK_EVENTS
 }
 
 /// A Lambert bounce off `position` (unit normal `ns` on the side the photon came from): the

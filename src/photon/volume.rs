@@ -1,8 +1,9 @@
 //! The volume photon map: photons left where a path scattered in a medium, each with the
 //! radius of its k nearest neighbours (the beam radiance estimate gives every photon its own
 //! disc), held in a bounding-volume hierarchy of their spheres so that a camera ray finds
-//! every photon whose sphere it passes through. Points here; a beam or plane kind would sit
-//! beside them. Owns storage and the ray query; must not weigh photons (the estimate does).
+//! every photon whose sphere it passes through. A map may also hold a kernel ellipsoid per
+//! photon inside its sphere (the estimate shapes them). Points here; a beam or plane kind would
+//! sit beside them. Owns storage and the ray query; must not weigh photons (the estimate does).
 
 use super::kdtree::{KdTree, Neighbours};
 use glam::Vec3;
@@ -16,6 +17,17 @@ pub struct VolumePhoton {
     pub power: Vec3,
     /// Unit direction the photon travelled in when it scattered.
     pub direction: Vec3,
+}
+
+/// The kernel of a photon shaped to its neighbourhood: the ellipsoid `dᵀ M d < 1` around
+/// the photon (`d` its offset), always inside the photon's sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KernelEllipsoid {
+    /// `M` as `[xx, yy, zz, xy, xz, yz]`, in inverse squared world units.
+    pub metric: [f32; 6],
+    /// `√det M`: a kernel over the unit ball, mapped onto the ellipsoid, is multiplied by it
+    /// to keep its integral.
+    pub root_det: f32,
 }
 
 /// The volume photon maps a pass reads along camera segments in media.
@@ -46,6 +58,8 @@ pub struct VolumeMap {
     photons: Vec<VolumePhoton>,
     /// Each photon's radius, in the photons' order.
     radii: Vec<f32>,
+    /// Each photon's kernel ellipsoid, in the photons' order; empty: round kernels.
+    shapes: Vec<KernelEllipsoid>,
     nodes: Vec<Node>,
 }
 
@@ -58,6 +72,8 @@ pub struct PhotonOnRay<'a> {
     pub t: f32,
     /// Squared distance from the photon to the ray.
     pub distance2: f32,
+    /// The photon's kernel ellipsoid, if the map's kernels are shaped.
+    pub shape: Option<&'a KernelEllipsoid>,
 }
 
 impl VolumeMap {
@@ -93,8 +109,30 @@ impl VolumeMap {
         Self {
             photons: order.iter().map(|&i| photons[i as usize]).collect(),
             radii: order.iter().map(|&i| radii[i as usize]).collect(),
+            shapes: Vec::new(),
             nodes,
         }
+    }
+
+    /// The photons, in the map's order.
+    pub fn photons(&self) -> &[VolumePhoton] {
+        &self.photons
+    }
+
+    /// Each photon's radius, in the map's order.
+    pub fn radii(&self) -> &[f32] {
+        &self.radii
+    }
+
+    /// Gives every photon (in the map's order) its kernel ellipsoid, each inside its sphere.
+    pub fn set_shapes(&mut self, shapes: Vec<KernelEllipsoid>) {
+        assert_eq!(shapes.len(), self.photons.len());
+        self.shapes = shapes;
+    }
+
+    /// Whether the photons' kernels are shaped.
+    pub fn is_shaped(&self) -> bool {
+        !self.shapes.is_empty()
     }
 
     pub fn len(&self) -> usize {
@@ -109,6 +147,7 @@ impl VolumeMap {
     pub fn bytes(&self) -> usize {
         self.photons.capacity() * std::mem::size_of::<VolumePhoton>()
             + self.radii.capacity() * 4
+            + self.shapes.capacity() * std::mem::size_of::<KernelEllipsoid>()
             + self.nodes.capacity() * std::mem::size_of::<Node>()
     }
 
@@ -143,7 +182,8 @@ impl VolumeMap {
                 continue;
             }
             let range = node.first as usize..(node.first + node.count) as usize;
-            for (photon, &radius) in self.photons[range.clone()].iter().zip(&self.radii[range]) {
+            for i in range {
+                let (photon, radius) = (&self.photons[i], self.radii[i]);
                 let to = photon.position - origin;
                 let t = to.dot(dir);
                 if t < t0 || t >= t1 {
@@ -156,6 +196,7 @@ impl VolumeMap {
                         radius,
                         t,
                         distance2,
+                        shape: self.shapes.get(i),
                     });
                 }
             }

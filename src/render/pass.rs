@@ -27,6 +27,7 @@ use super::kernel_probe::KernelProbe;
 use super::light_images::Aim;
 use super::pilots::PixelPlan;
 use super::schedule::{PhotonGrowth, Schedule, pass_estimator};
+use crate::estimate::beam::shaping::{VolumeDiffusion, shape_kernels};
 use crate::estimate::classic::KnnEstimate;
 use crate::estimate::diffusion::shaped::ShapedBy;
 use crate::estimate::kernel::RadialKernel;
@@ -73,6 +74,10 @@ pub struct RenderSettings {
         skip_serializing_if = "is_default_volume_k"
     )]
     pub volume_k: usize,
+    /// The contrast `K` of the volumetric caustics' diffusion kernel (`--volume-contrast`);
+    /// none: round kernels. Left out of the file when none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume_contrast: Option<f64>,
     /// Irradiance precomputed at every n-th global photon for final gathering (0: a k-NN
     /// estimate per gather ray).
     pub irradiance_stride: usize,
@@ -525,8 +530,18 @@ impl PassContext<'_> {
         let build = |photons: Vec<VolumePhoton>| {
             (!photons.is_empty()).then(|| VolumeMap::build(photons, k, max_radius, scale))
         };
-        let maps = (build(photons.caustic), build(photons.global));
+        let mut maps = (build(photons.caustic), build(photons.global));
         times.accumulate("volume maps", start.elapsed(), &[("photons", count)]);
+        if let (Some(map), Some(contrast)) = (maps.0.as_mut(), self.settings.volume_contrast) {
+            let start = Instant::now();
+            let params = VolumeDiffusion {
+                contrast,
+                ..VolumeDiffusion::default()
+            };
+            map.set_shapes(shape_kernels(map, scale, &params));
+            let photons = [("photons", map.len() as u64)];
+            times.accumulate("volume kernels", start.elapsed(), &photons);
+        }
         maps
     }
 

@@ -143,6 +143,12 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
     if args.volume_k < 1 {
         return invalid(format!("--volume-k {}: must be at least 1", args.volume_k));
     }
+    if !(args.volume_contrast.is_finite() && args.volume_contrast >= 0.0) {
+        return invalid(format!(
+            "--volume-contrast {}: must be 0 (round kernels) or positive",
+            args.volume_contrast
+        ));
+    }
     if args.global_k < 2 {
         return invalid(format!("--global-k {}: must be at least 2", args.global_k));
     }

@@ -281,6 +281,9 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
         final_gather: args.final_gather,
         global_k: args.global_k,
         volume_k: args.volume_k,
+        // Left out where there are no media, so their films keep their bytes.
+        volume_contrast: (world.media.is_some() && args.volume_contrast > 0.0)
+            .then_some(args.volume_contrast),
         irradiance_stride: args.irradiance_stride,
         light_samples: args.light_samples,
         glass_split_depth: args.glass_split_depth,

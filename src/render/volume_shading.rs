@@ -107,8 +107,12 @@ impl Integrator<'_> {
         let (lit, reads_photons) = (transport.shades(depth), transport.reads_photons(depth));
         let end = media.walk(origin, dir, t_max, medium, |s| {
             let m = media.medium(s.medium);
-            let tr = out.transmittance;
-            if lit {
+            // Radiance inside glass, seen from outside it (the eye's throughput does not
+            // carry the glass's 1/η² itself: it cancels where a ray enters and leaves).
+            let tr = out.transmittance / (media.index(s.medium) * media.index(s.medium));
+            // Under a subsurface surface every shadow ray meets that surface: the light
+            // that enters comes through the photons that refracted in.
+            if lit && !media.is_subsurface(s.medium) {
                 let single = self.single_scattered(origin, dir, s.medium, (s.t0, s.t1), sampler);
                 out.in_scattered.direct += tr * single;
             }

@@ -15,6 +15,9 @@ pub struct Medium {
     pub g: f32,
     /// Shapes whose `MediumInterface` names it on either side.
     pub bounded_by: usize,
+    /// Under the surface of a subsurface material: a path's scattering events in it are one
+    /// walk under that surface, not bounces.
+    pub subsurface: bool,
     pub kind: MediumKind,
 }
 

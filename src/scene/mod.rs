@@ -14,6 +14,7 @@
 
 pub mod check;
 mod curves;
+pub mod dipole;
 mod document;
 pub mod environment;
 pub mod files;

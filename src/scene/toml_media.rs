@@ -122,6 +122,7 @@ pub(crate) fn read_media(doc: &Document) -> Result<Vec<Medium>, SceneError> {
             defined_at: doc.place(&path),
             g,
             bounded_by: 0,
+            subsurface: false,
             kind,
         });
     }

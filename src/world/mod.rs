@@ -397,6 +397,7 @@ impl World {
             &device,
             &description.media,
             &description.shapes,
+            &description.materials,
             description.lights.len(),
             LOCAL_EPSILON * 1e-2,
         )?;
@@ -608,14 +609,14 @@ impl World {
     }
 
     /// Whether any object is a mirror, glass or glossy (so caustic photons exist) and some
-    /// diffuse surface could receive what it focuses: not a convex sphere alone, whose own
-    /// glossy reflections leave it.
+    /// diffuse surface or medium could receive what it focuses: not a convex sphere alone in
+    /// empty space, whose own glossy reflections leave it.
     pub fn has_specular(&self) -> bool {
         if self.caustic_targets.is_empty() {
             return false;
         }
         let d = &self.description;
-        if !d.instances.is_empty() || d.shapes.len() != 1 {
+        if !d.instances.is_empty() || d.shapes.len() != 1 || self.media.is_some() {
             return true;
         }
         !matches!(d.shapes[0], Shape::Sphere { .. })

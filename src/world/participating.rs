@@ -7,10 +7,11 @@
 
 use super::BoundingSphere;
 use super::hit_normals::{HitNormals, normals_at};
+use crate::bsdf::Model;
 use crate::embree::{self, EmbreeError};
 use crate::media::{FreeFlight, Medium};
 use crate::sampling::Rng;
-use crate::scene::{MediumId, MediumInterface, SceneMedia, Shape};
+use crate::scene::{Material, MediumId, MediumInterface, SceneMedia, Shape};
 use glam::Vec3;
 use std::collections::HashMap;
 
@@ -20,6 +21,10 @@ const MAX_CROSSINGS: usize = 256;
 
 pub struct Participating {
     media: Vec<Medium>,
+    /// By medium: under a subsurface material's surface.
+    subsurface: Vec<bool>,
+    /// By medium: the refractive index of the glass it fills (1 where it fills none).
+    index: Vec<f32>,
     /// The boundary surfaces; `None` when every medium is bounded by surfaces that scatter.
     boundaries: Option<embree::Scene>,
     boundary_normals: Vec<HitNormals>,
@@ -49,6 +54,7 @@ impl Participating {
         device: &embree::Device,
         description: &SceneMedia,
         shapes: &[Shape],
+        materials: &[Material],
         lights: usize,
         epsilon: f32,
     ) -> Result<Option<Self>, EmbreeError> {
@@ -82,12 +88,26 @@ impl Participating {
             }
             Some(builder.commit()?)
         };
+        // A medium inside a dielectric shape is as dense as its glass.
+        let mut index = vec![1.0f32; media.len()];
+        for &(shape, sides) in &description.shape_interfaces {
+            let glass = match materials[shapes[shape].material() as usize] {
+                Material::Glass { ior, .. } => Some(ior),
+                Material::Bsdf(Model::Dielectric { eta, .. }) => Some(eta),
+                _ => None,
+            };
+            if let (Some(ior), Some(inside)) = (glass, sides.inside) {
+                index[inside as usize] = ior;
+            }
+        }
         let mut light_media = vec![None; lights];
         for &(light, medium) in &description.light_media {
             light_media[light] = Some(medium);
         }
         Ok(Some(Self {
             media,
+            subsurface: description.media.iter().map(|m| m.subsurface).collect(),
+            index,
             boundaries,
             boundary_normals,
             boundary_sides,
@@ -103,6 +123,19 @@ impl Participating {
 
     pub fn medium(&self, id: MediumId) -> &Medium {
         &self.media[id as usize]
+    }
+
+    /// The refractive index of the glass medium `id` fills (1 where none): radiance inside
+    /// is that squared times what it is once it has left through the glass, so an eye in
+    /// vacuum reads the light scattered there divided by it squared.
+    pub fn index(&self, id: MediumId) -> f32 {
+        self.index[id as usize]
+    }
+
+    /// Whether medium `id` lies under a subsurface material's surface, where a path's events
+    /// are one walk and not bounces.
+    pub fn is_subsurface(&self, id: MediumId) -> bool {
+        self.subsurface[id as usize]
     }
 
     /// A sphere around the surfaces that bound media, where photons from lights at infinity

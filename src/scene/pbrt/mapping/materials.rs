@@ -107,6 +107,21 @@ impl Mapper<'_> {
             }
             Ok(r)
         };
+        // pbrt-v3's glass, smooth or rough (a subsurface material's surface too).
+        let glass = |ior: f32, rough: &[&str]| -> Result<Mapped, SceneError> {
+            Ok(if roughness(rough)? > 0.0 {
+                exact(Material::Bsdf(
+                    self.glossy_model("glass", params, at, &read, ior)?,
+                ))
+            } else {
+                params.bool("remaproughness").map_err(p)?;
+                exact(Material::Glass {
+                    ior,
+                    reflect_tint: colour("Kr", 1.0)?,
+                    transmit_tint: colour("Kt", 1.0)?,
+                })
+            })
+        };
         let mapped = match kind {
             "matte" => {
                 let albedo = colour("Kd", 0.5)?;
@@ -133,18 +148,7 @@ impl Mapper<'_> {
                     Some(x) => x,
                     None => index("eta")?.unwrap_or(1.5),
                 };
-                if roughness(&["roughness", "uroughness", "vroughness"])? > 0.0 {
-                    exact(Material::Bsdf(
-                        self.glossy_model(kind, params, at, &read, ior)?,
-                    ))
-                } else {
-                    params.bool("remaproughness").map_err(p)?;
-                    exact(Material::Glass {
-                        ior,
-                        reflect_tint: colour("Kr", 1.0)?,
-                        transmit_tint: colour("Kt", 1.0)?,
-                    })
-                }
+                glass(ior, &["roughness", "uroughness", "vroughness"])?
             }
             "dielectric" | "thindielectric" => {
                 let ior =
@@ -221,11 +225,13 @@ impl Mapper<'_> {
                     "material \"hair\" (pbrt's hair scattering model) is not supported; give the curves a diffuse material",
                 ));
             }
-            "subsurface" | "kdsubsurface" => {
-                return Err(at.error(
-                    "Material",
-                    format!("material \"{kind}\" scatters light in a medium under the surface, which dpm does not render yet; use glass (with a MediumInterface inside it) or a diffuse material"),
-                ));
+            kind if super::subsurface::is_subsurface(kind) => {
+                // The boundary; the medium under it is read with the shape
+                // (`Mapper::subsurface_medium`).
+                for name in super::subsurface::MEDIUM_PARAMETERS {
+                    params.mark_used(name);
+                }
+                glass(index("eta")?.unwrap_or(1.33), &["uroughness", "vroughness"])?
             }
             "disney" => {
                 return Err(at.error(

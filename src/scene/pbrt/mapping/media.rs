@@ -7,7 +7,7 @@
 //! Translate(p0) · Scale(p1 − p0). Bad values exit 2 naming their field. Owns that reading;
 //! must not build media for rendering.
 
-use super::super::parser::{MediumItem, ShapeItem};
+use super::super::parser::{Item, MediumItem, ShapeItem};
 use super::{Mapper, param_error, value_error};
 use crate::scene::pbrt::Dialect;
 use crate::scene::{Medium, MediumId, MediumInterface, MediumKind, SceneError, Shape};
@@ -88,15 +88,7 @@ impl Mapper<'_> {
                 format!("{scale} must be finite and not negative"),
             ));
         }
-        let g = item.params.float("g").map_err(p)?.unwrap_or(0.0);
-        if g.is_nan() || g.abs() >= 1.0 {
-            return Err(value_error(
-                item,
-                directive,
-                "g",
-                format!("{g} is not between −1 and 1"),
-            ));
-        }
+        let g = asymmetry(item, directive)?;
         let (sigma_a, sigma_s) = (sigma_a * scale, sigma_s * scale);
         let kind = if grid {
             self.density_grid(medium, sigma_a, sigma_s)?
@@ -109,6 +101,7 @@ impl Mapper<'_> {
             defined_at: item.at.to_string(),
             g,
             bounded_by: 0,
+            subsurface: false,
             kind,
         }))
     }
@@ -197,6 +190,21 @@ impl Mapper<'_> {
             grid_to_world,
         })
     }
+}
+
+/// The Henyey–Greenstein `g` of `item` (default 0), refused outside (−1, 1).
+pub(super) fn asymmetry(item: &Item, directive: &str) -> Result<f32, SceneError> {
+    let g = (item.params.float("g")).map_err(|e| param_error(directive, e))?;
+    let g = g.unwrap_or(0.0);
+    if g.is_nan() || g.abs() >= 1.0 {
+        return Err(value_error(
+            item,
+            directive,
+            "g",
+            format!("{g} is not between −1 and 1"),
+        ));
+    }
+    Ok(g)
 }
 
 /// The medium called `name` among those read (`None` for "" or a medium not read).

@@ -18,6 +18,7 @@ mod media;
 mod media_presets;
 mod mix;
 mod shapes;
+mod subsurface;
 mod tessellated;
 mod textures;
 
@@ -146,8 +147,30 @@ pub(super) fn scene(
         media,
         ..SceneMedia::default()
     };
+    // The medium under each subsurface material's surface, made once per material.
+    let mut under_surface = std::collections::HashMap::new();
     for shape in &parsed.shapes {
-        let interface = media::interface_of(shape, &scene_media.media);
+        let mut interface = media::interface_of(shape, &scene_media.media);
+        if let Some(i) = shape.material
+            && subsurface::is_subsurface(&parsed.materials[i].1.kind)
+        {
+            let inside = match under_surface.get(&i) {
+                Some(&id) => id,
+                None => {
+                    let item = &parsed.materials[i].1;
+                    let name = match item.params.string("name").ok().flatten() {
+                        Some(preset) => format!("{} \"{preset}\"", item.kind),
+                        None => item.kind.clone(),
+                    };
+                    scene_media.media.push(m.subsurface_medium(item, name)?);
+                    let id = (scene_media.media.len() - 1) as crate::scene::MediumId;
+                    under_surface.insert(i, id);
+                    id
+                }
+            };
+            scene_media.media[inside as usize].bounded_by += 1;
+            interface.inside = Some(inside);
+        }
         if shape.area_light.is_none()
             && let Some(i) = shape.material
             && matches!(

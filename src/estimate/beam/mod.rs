@@ -3,7 +3,13 @@
 //! segment passes through, each weighed by a normalised 2-D kernel of its distance to the ray
 //! over its own radius, the phase function between its direction and the eye's, and the
 //! transmittance from the segment's start to where it lies along the ray. One query per
-//! segment, no marching. Owns that sum; must not trace rays or photons.
+//! segment, no marching. A map whose kernels are shaped ([`shaping`]) is read with each
+//! photon's ellipsoid integrated along the ray ([`ellipsoid`]) instead of its disc. Owns that
+//! sum; must not trace rays or photons.
+
+pub mod eigen3;
+pub mod ellipsoid;
+pub mod shaping;
 
 use crate::media::{Medium, phase::HenyeyGreenstein};
 use crate::photon::volume::VolumeMap;
@@ -39,11 +45,16 @@ pub fn in_scattered(
     let phase: HenyeyGreenstein = medium.phase();
     found.clear();
     map.along(origin, dir, t0, t1, |on| {
-        let r2 = on.radius * on.radius;
-        // The eye looks back along −dir; the photon's light arrives from −direction.
-        let p = phase.p(-dir, -on.photon.direction);
-        let w = disc_kernel(on.distance2 / r2) / r2 * p;
-        if w > 0.0 {
+        let kernel = match on.shape {
+            None => {
+                let r2 = on.radius * on.radius;
+                disc_kernel(on.distance2 / r2) / r2
+            }
+            Some(shape) => ellipsoid::line_integral(shape, origin - on.photon.position, dir),
+        };
+        if kernel > 0.0 {
+            // The eye looks back along −dir; the photon's light arrives from −direction.
+            let w = kernel * phase.p(-dir, -on.photon.direction);
             found.push((on.t, on.photon.power * w));
         }
     });
