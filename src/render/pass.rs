@@ -532,7 +532,11 @@ impl PassContext<'_> {
         };
         let mut maps = (build(photons.caustic), build(photons.global));
         times.accumulate("volume maps", start.elapsed(), &[("photons", count)]);
-        if let (Some(map), Some(contrast)) = (maps.0.as_mut(), self.settings.volume_contrast) {
+        // A walk under a subsurface surface is smooth: shaping its photons would only cost.
+        let shaped = media.is_some_and(|m| m.has_free_media());
+        if let (Some(map), Some(contrast), true) =
+            (maps.0.as_mut(), self.settings.volume_contrast, shaped)
+        {
             let start = Instant::now();
             let params = VolumeDiffusion {
                 contrast,

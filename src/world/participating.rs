@@ -132,6 +132,12 @@ impl Participating {
         self.index[id as usize]
     }
 
+    /// Whether some medium lies outside every subsurface surface (fog, smoke, a liquid in
+    /// glass): where volumetric caustics form.
+    pub fn has_free_media(&self) -> bool {
+        self.subsurface.iter().any(|&under| !under)
+    }
+
     /// Whether medium `id` lies under a subsurface material's surface, where a path's events
     /// are one walk and not bounces.
     pub fn is_subsurface(&self, id: MediumId) -> bool {
