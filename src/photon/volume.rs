@@ -130,11 +130,6 @@ impl VolumeMap {
         self.shapes = shapes;
     }
 
-    /// Whether the photons' kernels are shaped.
-    pub fn is_shaped(&self) -> bool {
-        !self.shapes.is_empty()
-    }
-
     pub fn len(&self) -> usize {
         self.photons.len()
     }

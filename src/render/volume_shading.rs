@@ -109,7 +109,8 @@ impl Integrator<'_> {
             let m = media.medium(s.medium);
             // Radiance inside glass, seen from outside it (the eye's throughput does not
             // carry the glass's 1/η² itself: it cancels where a ray enters and leaves).
-            let tr = out.transmittance / (media.index(s.medium) * media.index(s.medium));
+            let eta = media.index(s.medium);
+            let tr = out.transmittance / (eta * eta);
             // Under a subsurface surface every shadow ray meets that surface: the light
             // that enters comes through the photons that refracted in.
             if lit && !media.is_subsurface(s.medium) {

@@ -17,7 +17,7 @@
 //! sphere, its integral 1 whatever its shape. Owns that analysis; must not trace or render.
 
 use super::eigen3::SymmetricTensor3;
-use super::ellipsoid::ellipsoid;
+use super::ellipsoid::{ball, ellipsoid};
 use crate::estimate::diffusion::tensor::diffusivity;
 use crate::photon::KdTree;
 use crate::photon::volume::{KernelEllipsoid, VolumeMap};
@@ -111,7 +111,7 @@ pub fn shape_kernels(
                 weight += w;
             });
             if weight <= 0.0 {
-                return ellipsoid([DVec3::X, DVec3::Y, DVec3::Z], [1.0; 3], r);
+                return ball(r);
             }
             let eigen = structure.scaled(1.0 / weight).eigen();
             let noise = params.noise_floor * noise / weight;

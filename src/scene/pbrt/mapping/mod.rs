@@ -158,11 +158,7 @@ pub(super) fn scene(
                 Some(&id) => id,
                 None => {
                     let item = &parsed.materials[i].1;
-                    let name = match item.params.string("name").ok().flatten() {
-                        Some(preset) => format!("{} \"{preset}\"", item.kind),
-                        None => item.kind.clone(),
-                    };
-                    scene_media.media.push(m.subsurface_medium(item, name)?);
+                    scene_media.media.push(m.subsurface_medium(item)?);
                     let id = (scene_media.media.len() - 1) as crate::scene::MediumId;
                     under_surface.insert(i, id);
                     id

@@ -32,12 +32,12 @@ pub(super) const MEDIUM_PARAMETERS: &[&str] =
 
 impl Mapper<'_> {
     /// The medium under the surface of the material `item` (`subsurface`/`kdsubsurface`),
-    /// called `name`.
-    pub(super) fn subsurface_medium(
-        &mut self,
-        item: &Item,
-        name: String,
-    ) -> Result<Medium, SceneError> {
+    /// named by its kind and measured medium.
+    pub(super) fn subsurface_medium(&mut self, item: &Item) -> Result<Medium, SceneError> {
+        let name = match item.params.string("name").ok().flatten() {
+            Some(measured) => format!("{} \"{measured}\"", item.kind),
+            None => item.kind.clone(),
+        };
         let directive = "Material";
         let p = |e| param_error(directive, e);
         let colour = |field: &str| -> Result<Option<Vec3>, SceneError> {
