@@ -40,13 +40,15 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
 }
 
 /// A scene that loaded: every number finite, every index in range, every light emitting,
-/// something to see (world shapes or instances of prototypes that have shapes).
+/// something to see (world shapes, instances of prototypes that have shapes, or media boundaries).
 pub fn check_scene(scene: &SceneDescription) {
     let c = &scene.camera;
     assert!(c.position.is_finite() && c.look_at.is_finite() && c.up.is_finite());
     assert!(c.fov_y_degrees().is_none_or(|f| f > 0.0 && f < 180.0) && c.width > 0 && c.height > 0);
     assert!(!scene.lights.is_empty());
-    assert!(!scene.shapes.is_empty() || !scene.instances.is_empty());
+    // A medium's boundaries alone are something to see (a fog sphere under a sky).
+    let boundaries = !scene.media.boundaries.is_empty();
+    assert!(!scene.shapes.is_empty() || !scene.instances.is_empty() || boundaries);
     for light in &scene.lights {
         assert!(check_light(light).is_ok(), "{light:?}");
     }
