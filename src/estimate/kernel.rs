@@ -164,9 +164,67 @@ fn gaussian_shape_integral() -> f64 {
     PI * (1.0 - mean_one_minus_exp / (1.0 - (-b).exp()))
 }
 
+/// The share of the unit-disc Epanechnikov kernel `(2/π)(1 − x² − y²)` with `x < h`: its
+/// marginal is `(8/(3π))(1 − x²)^{3/2}`, whose primitive is
+/// `(x(5 − 2x²)√(1 − x²) + 3 asin x)/8`.
+pub fn epanechnikov_share_below(h: f64) -> f64 {
+    let h = h.clamp(-1.0, 1.0);
+    let primitive =
+        |x: f64| (x * (5.0 - 2.0 * x * x) * (1.0 - x * x).max(0.0).sqrt() + 3.0 * x.asin()) / 8.0;
+    (8.0 / (3.0 * PI)) * (primitive(h) - primitive(-1.0))
+}
+
+/// The share of the line integral of the 3-D Epanechnikov kernel, `(5/2π)(1 − x² − y²)^{3/2}`
+/// over the unit disc (what a ball, or an ellipsoid up to an affine map, projects to along a
+/// ray), with `x < h`: its marginal is `(15/16)(1 − x²)²`.
+pub fn projected_ball_share_below(h: f64) -> f64 {
+    let h = h.clamp(-1.0, 1.0);
+    let primitive = |x: f64| x - 2.0 / 3.0 * x.powi(3) + x.powi(5) / 5.0;
+    15.0 / 16.0 * (primitive(h) - primitive(-1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The share of `profile(x² + y²)` over the unit disc with x < h, by the midpoint rule.
+    fn share_by_grid(profile: impl Fn(f64) -> f64, h: f64) -> f64 {
+        let n = 800;
+        let (mut below, mut all) = (0.0, 0.0);
+        for i in 0..n {
+            for j in 0..n {
+                let x = -1.0 + (i as f64 + 0.5) * 2.0 / n as f64;
+                let y = -1.0 + (j as f64 + 0.5) * 2.0 / n as f64;
+                let w = profile((x * x + y * y).min(1.0));
+                all += w;
+                if x < h {
+                    below += w;
+                }
+            }
+        }
+        below / all
+    }
+
+    #[test]
+    fn the_shares_below_a_line_run_from_nothing_to_all_as_the_disc_does() {
+        for share in [epanechnikov_share_below, projected_ball_share_below] {
+            assert!(share(-1.0).abs() < 1e-12);
+            assert!((share(0.0) - 0.5).abs() < 1e-12);
+            assert!((share(1.0) - 1.0).abs() < 1e-12);
+        }
+        for h in [-0.9, -0.4, 0.25, 0.5, 0.8, 0.97] {
+            let disc = share_by_grid(|r2| 1.0 - r2, h);
+            assert!(
+                (epanechnikov_share_below(h) - disc).abs() < 1e-4,
+                "disc at {h}"
+            );
+            let ball = share_by_grid(|r2| (1.0 - r2).powf(1.5), h);
+            assert!(
+                (projected_ball_share_below(h) - ball).abs() < 1e-4,
+                "ball at {h}"
+            );
+        }
+    }
 
     /// Midpoint rule in polar coordinates: ∫_disc K(ρ²) dA = 2π ∫_0^1 K(ρ²) ρ dρ.
     fn disc_integral(k: RadialKernel) -> f64 {

@@ -10,7 +10,7 @@
 //! maps or touch pixels.
 
 use super::gather::Reception;
-use super::integrator::{Emission, Integrator, Radiance};
+use super::integrator::{Emission, Integrator, Radiance, RayStart};
 use crate::bsdf::{Bsdf, Model, Part};
 use crate::estimate::{Query, Scratch};
 use crate::sampling::{Frame, PathSampler};
@@ -187,7 +187,8 @@ impl Integrator<'_> {
         let origin = self.world.spawn_from(at.hit, at.ng, next);
         let medium = self.medium_after(at.hit, next, at.medium);
         if s.delta {
-            return weight * self.trace(origin, next, medium, depth + 1, along, sampler, scratch);
+            let start = RayStart::on_surface(origin, at.ng);
+            return weight * self.trace(start, next, medium, depth + 1, along, sampler, scratch);
         }
         // Shadow rays sample the far side only through a lobe that spreads transmitted light;
         // elsewhere light through a transmitting lobe is this sample's alone.
@@ -204,8 +205,16 @@ impl Integrator<'_> {
         // Through media the sample goes on as a camera ray does: what lies at its end is
         // dimmed, and the light scattered towards the surface along the way is added.
         let through = (self.world.media.is_some()).then(|| {
-            let t_max = found.as_ref().map_or(f32::INFINITY, |f| f.t);
-            self.through_media(origin, next, t_max, medium, depth + 1, sampler, scratch)
+            let start = RayStart::on_surface(origin, at.ng);
+            self.through_media(
+                start,
+                next,
+                found.as_ref(),
+                medium,
+                depth + 1,
+                sampler,
+                scratch,
+            )
         });
         // `end`: what the sample sees at its end, already times its weight.
         let seen_through = |end: Radiance| match &through {

@@ -7,7 +7,7 @@
 //! touch pixels.
 
 use super::integrator::{
-    CLUTTER_DEPTH, Emission, EstimatedMap, Indirect, Integrator, sampled_specular,
+    CLUTTER_DEPTH, Emission, EstimatedMap, Indirect, Integrator, RayStart, sampled_specular,
 };
 use crate::bsdf::{Bsdf, Part};
 use crate::estimate::{PrecomputedIrradiance, Query, Receiver, Scratch, THICK_GATHER};
@@ -210,7 +210,7 @@ impl Integrator<'_> {
             return Vec3::ZERO;
         }
         let next = self.trace(
-            p,
+            RayStart::on_surface(p, ng),
             d,
             medium,
             depth + 1,

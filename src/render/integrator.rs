@@ -29,6 +29,33 @@ pub struct Radiance {
     pub indirect: Vec3,
 }
 
+/// Where an eye ray starts: its point, and the unit geometric normal of the surface it
+/// leaves (`None` at the camera), which bounds the medium the ray starts in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayStart {
+    pub point: Vec3,
+    pub surface_normal: Option<Vec3>,
+}
+
+impl From<Vec3> for RayStart {
+    fn from(point: Vec3) -> Self {
+        Self {
+            point,
+            surface_normal: None,
+        }
+    }
+}
+
+impl RayStart {
+    /// A ray spawned from a surface of geometric normal `ng`.
+    pub fn on_surface(point: Vec3, ng: Vec3) -> Self {
+        Self {
+            point,
+            surface_normal: Some(ng),
+        }
+    }
+}
+
 impl Radiance {
     pub fn total(&self) -> Vec3 {
         self.direct + self.caustic + self.indirect
@@ -179,7 +206,7 @@ impl Integrator<'_> {
     #[allow(clippy::too_many_arguments)]
     pub fn trace(
         &self,
-        origin: Vec3,
+        start: impl Into<RayStart>,
         dir: Vec3,
         medium: Option<MediumId>,
         depth: u32,
@@ -188,6 +215,8 @@ impl Integrator<'_> {
         scratch: &mut Scratch,
     ) -> Radiance {
         let counted = |e: Vec3| emission.counted(e);
+        let start = start.into();
+        let origin = start.point;
         let hit = self.world.intersect(origin, dir, 0.0, f32::INFINITY);
         if self.world.media.is_none() {
             let Some(hit) = hit else {
@@ -195,8 +224,7 @@ impl Integrator<'_> {
             };
             return self.shade(&hit, dir, None, depth, emission, sampler, scratch);
         }
-        let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-        let through = self.through_media(origin, dir, t_max, medium, depth, sampler, scratch);
+        let through = self.through_media(start, dir, hit.as_ref(), medium, depth, sampler, scratch);
         if through.transmittance == Vec3::ZERO {
             return through.in_scattered;
         }
@@ -276,7 +304,7 @@ impl Integrator<'_> {
                 let r = reflect(dir, ns);
                 *tint
                     * self.trace(
-                        self.world.spawn_from(hit, ng, r),
+                        RayStart::on_surface(self.world.spawn_from(hit, ng, r), ng),
                         r,
                         self.medium_after(hit, r, medium),
                         depth + 1,
@@ -304,7 +332,7 @@ impl Integrator<'_> {
                     };
                     return *tint
                         * self.trace(
-                            self.world.spawn_from(hit, ng, next),
+                            RayStart::on_surface(self.world.spawn_from(hit, ng, next), ng),
                             next,
                             self.medium_after(hit, next, medium),
                             depth + 1,
@@ -315,7 +343,7 @@ impl Integrator<'_> {
                 }
                 let mut l = (f * *reflect_tint)
                     * self.trace(
-                        self.world.spawn_from(hit, ng, r),
+                        RayStart::on_surface(self.world.spawn_from(hit, ng, r), ng),
                         r,
                         self.medium_after(hit, r, medium),
                         depth + 1,
@@ -326,7 +354,7 @@ impl Integrator<'_> {
                 if let Some(t) = refract(dir, ns, eta).filter(|_| f < 1.0) {
                     l += ((1.0 - f) * *transmit_tint)
                         * self.trace(
-                            self.world.spawn_from(hit, ng, t),
+                            RayStart::on_surface(self.world.spawn_from(hit, ng, t), ng),
                             t,
                             self.medium_after(hit, t, medium),
                             depth + 1,

@@ -6,7 +6,8 @@
 //! that scattered or bounced before, and volumetric caustics) from the volume photon maps by
 //! the beam radiance estimate. Part of [`Integrator`]; owns that split, must not build maps.
 
-use super::integrator::{Integrator, Radiance};
+use super::integrator::{Integrator, Radiance, RayStart};
+use crate::estimate::beam::walls::SegmentWalls;
 use crate::estimate::{Scratch, beam};
 use crate::media::FreeFlight;
 use crate::media::equiangular::{equiangular, within_cone};
@@ -80,16 +81,17 @@ impl Integrator<'_> {
         }
     }
 
-    /// The segment `origin + t·dir`, t from 0 to `t_max` (the first surface, or infinity),
+    /// The segment `origin + t·dir` from `start` to `end` (the first surface, or infinity),
     /// starting in `medium`, on an eye path `depth` bounces from the camera: a scattering
     /// point there is that path's next vertex, lit by the lights and read from the maps as
-    /// far as the scene's cap on paths allows, as a surface there would be.
+    /// far as the scene's cap on paths allows, as a surface there would be. The surfaces at
+    /// either end, and the boundaries crossed, are walls to the beam estimate.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn through_media(
         &self,
-        origin: Vec3,
+        start: RayStart,
         dir: Vec3,
-        t_max: f32,
+        end: Option<&Interaction>,
         medium: Option<MediumId>,
         depth: u32,
         sampler: &mut PathSampler,
@@ -105,6 +107,8 @@ impl Integrator<'_> {
         };
         let transport = self.world.description.transport;
         let (lit, reads_photons) = (transport.shades(depth), transport.reads_photons(depth));
+        let (origin, t_max) = (start.point, end.map_or(f32::INFINITY, |h| h.t));
+        let end_normal = end.map(|h| h.geometric_normal);
         let end = media.walk(origin, dir, t_max, medium, |s| {
             let m = media.medium(s.medium);
             // Radiance inside glass, seen from outside it (the eye's throughput does not
@@ -119,12 +123,23 @@ impl Integrator<'_> {
             }
             let found = &mut scratch.beam;
             let rng = &mut sampler.rng;
+            let span = (s.t0, s.t1);
+            let walls = SegmentWalls {
+                start: match s.t0 > 0.0 {
+                    true => s.entered_through,
+                    false => start.surface_normal,
+                },
+                end: match s.t1 < t_max {
+                    true => s.left_through,
+                    false => end_normal,
+                },
+            };
             if let (true, Some(map)) = (reads_photons, self.volume.caustic) {
-                let l = beam::in_scattered(map, m, origin, dir, s.t0, s.t1, rng, found);
+                let l = beam::in_scattered(map, m, origin, dir, span, &walls, rng, found);
                 out.in_scattered.caustic += tr * l;
             }
             if let (true, Some(map)) = (reads_photons, self.volume.global) {
-                let l = beam::in_scattered(map, m, origin, dir, s.t0, s.t1, rng, found);
+                let l = beam::in_scattered(map, m, origin, dir, span, &walls, rng, found);
                 out.in_scattered.indirect += tr * l;
             }
             out.transmittance *= m.transmittance(origin, dir, s.t0, s.t1, rng);

@@ -46,6 +46,12 @@ pub struct MediumSegment {
     pub medium: MediumId,
     pub t0: f32,
     pub t1: f32,
+    /// The unit normal of the boundary the segment starts on, if it entered this medium
+    /// there (not at the ray's origin); either side.
+    pub entered_through: Option<Vec3>,
+    /// The unit normal of the boundary the segment ends on, if the medium ends there (not at
+    /// `t_max`); either side.
+    pub left_through: Option<Vec3>,
 }
 
 impl Participating {
@@ -197,27 +203,40 @@ impl Participating {
         mut visit: impl FnMut(MediumSegment) -> bool,
     ) -> Option<Option<MediumId>> {
         let mut t = 0.0f32;
+        let mut entered_through = None;
         for _ in 0..MAX_CROSSINGS {
             let crossing =
                 (self.boundaries.as_ref()).and_then(|scene| scene.intersect(origin, dir, t, t_max));
+            // Where the ray crosses, the normal there and the medium past it.
+            let across = crossing.as_ref().map(|hit| {
+                let position = origin + hit.t * dir;
+                let normals = &self.boundary_normals[hit.geometry as usize];
+                let (normal, _) = normals_at(normals, hit, position, dir);
+                let after = self.boundary_sides[hit.geometry as usize].after_crossing(dir, normal);
+                (
+                    hit.t + self.epsilon * position.abs().max_element().max(1.0),
+                    normal,
+                    after,
+                )
+            });
             let t1 = crossing.as_ref().map_or(t_max, |hit| hit.t);
+            let left_through = across.and_then(|(_, n, after)| (after != medium).then_some(n));
             if let Some(m) = medium
                 && !visit(MediumSegment {
                     medium: m,
                     t0: t,
                     t1,
+                    entered_through,
+                    left_through,
                 })
             {
                 return None;
             }
-            let Some(hit) = crossing else {
+            let Some((next, normal, after)) = across else {
                 return Some(medium);
             };
-            let position = origin + hit.t * dir;
-            let normals = &self.boundary_normals[hit.geometry as usize];
-            let (normal, _) = normals_at(normals, &hit, position, dir);
-            medium = self.boundary_sides[hit.geometry as usize].after_crossing(dir, normal);
-            t = hit.t + self.epsilon * position.abs().max_element().max(1.0);
+            entered_through = (after != medium).then_some(normal);
+            (t, medium) = (next, after);
         }
         Some(medium)
     }

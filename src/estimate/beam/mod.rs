@@ -4,18 +4,21 @@
 //! over its own radius, the phase function between its direction and the eye's, and the
 //! transmittance from the segment's start to where it lies along the ray. One query per
 //! segment, no marching. A map whose kernels are shaped ([`shaping`]) is read with each
-//! photon's ellipsoid integrated along the ray ([`ellipsoid`]) instead of its disc. Owns that
-//! sum; must not trace rays or photons.
+//! photon's ellipsoid integrated along the ray ([`ellipsoid`]) instead of its disc; beside the
+//! surfaces a segment starts or ends on, each weight is divided by the share of its kernel the
+//! wall leaves inside the medium ([`walls`]). Owns that sum; must not trace rays or photons.
 
 pub mod eigen3;
 pub mod ellipsoid;
 pub mod shaping;
+pub mod walls;
 
 use crate::media::{Medium, phase::HenyeyGreenstein};
 use crate::photon::volume::VolumeMap;
 use crate::sampling::Rng;
 use glam::Vec3;
 use std::f32::consts::FRAC_2_PI;
+use walls::{SegmentWalls, kept_share};
 
 /// The 2-D Epanechnikov kernel over the unit disc, (2/π)(1 − x²) at squared distance `x2`
 /// (in radii): it integrates to 1 over the disc.
@@ -29,16 +32,16 @@ pub fn disc_kernel(x2: f32) -> f32 {
 }
 
 /// In-scattered radiance towards `origin` along `origin + t·dir` (unit `dir`) for t in
-/// [`t0`, `t1`), all of it inside `medium`, from the photons of `map`, before the
-/// transmittance from the ray's origin to `t0`. `found` is scratch.
+/// [`t0`, `t1`), all of it inside `medium` and between `walls`, from the photons of `map`,
+/// before the transmittance from the ray's origin to `t0`. `found` is scratch.
 #[allow(clippy::too_many_arguments)]
 pub fn in_scattered(
     map: &VolumeMap,
     medium: &Medium,
     origin: Vec3,
     dir: Vec3,
-    t0: f32,
-    t1: f32,
+    (t0, t1): (f32, f32),
+    walls: &SegmentWalls,
     rng: &mut Rng,
     found: &mut Vec<(f32, Vec3)>,
 ) -> Vec3 {
@@ -51,6 +54,10 @@ pub fn in_scattered(
                 disc_kernel(on.distance2 / r2) / r2
             }
             Some(shape) => ellipsoid::line_integral(shape, origin - on.photon.position, dir),
+        };
+        let kernel = match walls.is_empty() {
+            true => kernel,
+            false => kernel / kept_share(walls, dir, (t0, on.t, t1), on.radius, on.shape),
         };
         if kernel > 0.0 {
             // The eye looks back along −dir; the photon's light arrives from −direction.

@@ -12,6 +12,7 @@
 
 use super::super::Query;
 use super::super::classic::{PhotonReader, power_of};
+use super::super::kernel::epanechnikov_share_below;
 use crate::photon::PhotonMap;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -178,41 +179,9 @@ pub fn fit_step(
     best.map(|(e, g)| (e, g * n as f64 / total))
 }
 
-/// The share of the unit-disc Epanechnikov kernel `(2/π)(1 − x² − y²)` with `x < h`: its
-/// marginal is `(8/(3π))(1 − x²)^{3/2}`, whose primitive is
-/// `(x(5 − 2x²)√(1 − x²) + 3 asin x)/8`.
-pub fn epanechnikov_share_below(h: f64) -> f64 {
-    let h = h.clamp(-1.0, 1.0);
-    let primitive =
-        |x: f64| (x * (5.0 - 2.0 * x * x) * (1.0 - x * x).max(0.0).sqrt() + 3.0 * x.asin()) / 8.0;
-    (8.0 / (3.0 * PI)) * (primitive(h) - primitive(-1.0))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_epanechnikov_share_runs_from_nothing_to_all_as_the_disc_does() {
-        assert!(epanechnikov_share_below(-1.0).abs() < 1e-12);
-        assert!((epanechnikov_share_below(0.0) - 0.5).abs() < 1e-12);
-        assert!((epanechnikov_share_below(1.0) - 1.0).abs() < 1e-12);
-        // The midpoint rule over the disc.
-        let n = 800;
-        let (mut below, mut all) = (0.0, 0.0);
-        for i in 0..n {
-            for j in 0..n {
-                let x = -1.0 + (i as f64 + 0.5) * 2.0 / n as f64;
-                let y = -1.0 + (j as f64 + 0.5) * 2.0 / n as f64;
-                let w = (1.0 - x * x - y * y).max(0.0);
-                all += w;
-                if x < 0.3 {
-                    below += w;
-                }
-            }
-        }
-        assert!((epanechnikov_share_below(0.3) - below / all).abs() < 1e-4);
-    }
 
     #[test]
     fn segment_areas_add_up_to_the_disc() {
