@@ -18,6 +18,7 @@ use super::{
     TexturedParameter, ThinLens, TriangleMesh,
 };
 use glam::{Vec2, Vec3};
+use rayon::slice::ParallelSliceMut;
 use std::collections::HashMap;
 
 /// The names of [`SpotFalloff`]s in the scene file.
@@ -489,9 +490,32 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
         let glass = |m: &Material| matches!(m, Material::Glass { .. });
         !materials[m as usize].any_shown(materials, &glass)
     };
+    // Where each light is: lights at infinity are inside nothing; a mesh light is judged by
+    // its middle.
+    let lights: Vec<(usize, Vec3)> = (scene.lights.iter().enumerate())
+        .filter_map(|(l, light)| match light {
+            Light::Point { position, .. } | Light::Spot { position, .. } => Some((l, *position)),
+            Light::Sphere { center, .. } => Some((l, *center)),
+            Light::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                ..
+            } => Some((l, *corner + 0.5 * (*edge_u + *edge_v))),
+            Light::Mesh { mesh, .. } => {
+                let (lo, hi) = bounds(&mesh.positions);
+                Some((l, 0.5 * (lo + hi)))
+            }
+            Light::Distant { .. } | Light::Environment { .. } | Light::EnvironmentMap(_) => None,
+        })
+        .collect();
     let mut warnings = Vec::new();
+    if lights.is_empty() {
+        return warnings;
+    }
     for (s, shape) in scene.shapes.iter().enumerate() {
-        let inside: Box<dyn Fn(Vec3) -> bool> = match shape {
+        // The cheap tests first: a big mesh with no light within its bounds is never walked.
+        let (inside, what): (Box<dyn Fn(Vec3) -> bool>, _) = match shape {
             Shape::Sphere {
                 center,
                 radius,
@@ -499,42 +523,26 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
                 ..
             } if opaque(*material) => {
                 let (c, r) = (*center, *radius);
-                Box::new(move |p: Vec3| p.distance_squared(c) < r * r)
+                let inside = move |p: Vec3| p.distance_squared(c) < r * r;
+                (Box::new(inside), "an opaque sphere")
             }
-            Shape::Triangles(mesh) if opaque(mesh.material) && is_closed(mesh) => {
-                Box::new(move |p: Vec3| inside_closed_mesh(mesh, p))
+            Shape::Triangles(mesh) if opaque(mesh.material) => {
+                let (lo, hi) = bounds(&mesh.positions);
+                let within = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
+                if !lights.iter().any(|&(_, at)| within(at)) || !is_closed(mesh) {
+                    continue;
+                }
+                let inside = move |p: Vec3| within(p) && inside_closed_mesh(mesh, p);
+                // Curves are never closed (a tube is open at its ends).
+                (Box::new(inside), "a closed opaque mesh")
             }
             _ => continue,
         };
         if inside(scene.camera.position) {
             continue;
         }
-        for (l, light) in scene.lights.iter().enumerate() {
-            // Lights at infinity are inside nothing; a mesh light is judged by its middle.
-            let at = match light {
-                Light::Point { position, .. } | Light::Spot { position, .. } => *position,
-                Light::Sphere { center, .. } => *center,
-                Light::Quad {
-                    corner,
-                    edge_u,
-                    edge_v,
-                    ..
-                } => *corner + 0.5 * (*edge_u + *edge_v),
-                Light::Mesh { mesh, .. } => {
-                    let lo = mesh.positions.iter().fold(Vec3::MAX, |a, &p| a.min(p));
-                    let hi = mesh.positions.iter().fold(Vec3::MIN, |a, &p| a.max(p));
-                    0.5 * (lo + hi)
-                }
-                Light::Distant { .. } | Light::Environment { .. } | Light::EnvironmentMap(_) => {
-                    continue;
-                }
-            };
+        for &(l, at) in &lights {
             if inside(at) {
-                let what = match shape {
-                    Shape::Sphere { .. } => "an opaque sphere",
-                    // Curves are never closed (a tube is open at its ends).
-                    Shape::Triangles(_) | Shape::Curves(_) => "a closed opaque mesh",
-                };
                 warnings.push(format!(
                     "lights[{l}] is inside {what} (shape {s}) and the camera is outside it: \
                      none of its light can reach the picture"
@@ -545,20 +553,27 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
     warnings
 }
 
+/// The box around `points`.
+fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
+    (points.iter()).fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| {
+        (lo.min(p), hi.max(p))
+    })
+}
+
 /// Every edge shared by exactly two triangles (vertices compared by position, since OBJ
-/// faces split by normals repeat positions).
+/// faces split by normals repeat positions): sorted, each edge must appear exactly twice.
 fn is_closed(mesh: &TriangleMesh) -> bool {
     let key = |i: u32| mesh.positions[i as usize].to_array().map(f32::to_bits);
-    let mut edges: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+    let mut edges: Vec<([u32; 3], [u32; 3])> = Vec::with_capacity(3 * mesh.triangles.len());
     for &[a, b, c] in &mesh.triangles {
         for (p, q) in [(a, b), (b, c), (c, a)] {
             let (p, q) = (key(p), key(q));
-            *edges
-                .entry(if p < q { (p, q) } else { (q, p) })
-                .or_default() += 1;
+            edges.push(if p < q { (p, q) } else { (q, p) });
         }
     }
-    !edges.is_empty() && edges.values().all(|&n| n == 2)
+    edges.par_sort_unstable();
+    let mut runs = edges.chunk_by(|x, y| x == y);
+    !edges.is_empty() && runs.all(|run| run.len() == 2)
 }
 
 /// Ray parity along a fixed, axis-avoiding direction.

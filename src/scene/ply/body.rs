@@ -105,6 +105,22 @@ impl Body<'_> {
         Ok(())
     }
 
+    /// The binary body from the reader's place on, and whether it is big-endian; `None` for
+    /// an ASCII body.
+    pub(super) fn binary_rest(&self) -> Option<(&[u8], bool)> {
+        match self {
+            Body::Binary { bytes, at, big } => Some((&bytes[*at..], *big)),
+            Body::Ascii(_) => None,
+        }
+    }
+
+    /// Moves a binary reader `n` bytes on (what [`Body::binary_rest`] handed out was read).
+    pub(super) fn advance(&mut self, n: usize) {
+        if let Body::Binary { at, .. } = self {
+            *at += n;
+        }
+    }
+
     pub(super) fn begin(&mut self, element: &str, i: usize) -> Result<(), PlyError> {
         if let Body::Ascii(a) = self {
             loop {
@@ -177,21 +193,7 @@ impl Body<'_> {
                     });
                 };
                 *at += size;
-                let mut b = [0u8; 8];
-                b[..size].copy_from_slice(raw);
-                if *big {
-                    b[..size].reverse();
-                }
-                Ok(match ty {
-                    Scalar::I8 => b[0] as i8 as f64,
-                    Scalar::U8 => b[0] as f64,
-                    Scalar::I16 => i16::from_le_bytes([b[0], b[1]]) as f64,
-                    Scalar::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
-                    Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                    Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                    Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                    Scalar::F64 => f64::from_le_bytes(b),
-                })
+                Ok(ty.decode(raw, *big))
             }
         }
     }

@@ -3,9 +3,12 @@
 //! `texture_s, texture_t`), and faces of three or four corners (quads split in two). Owns the file format and
 //! its errors; the caller places the mesh in the world. A count in the header is checked
 //! against the bytes (or lines) the file really has before anything is allocated for it, so a
-//! header that claims 10¹² vertices is refused, not obeyed. Must not know scenes or Embree.
+//! header that claims 10¹² vertices is refused, not obeyed. Binary bodies of fixed-size
+//! records (the common case) are read in parallel ([`fast`]), the rest record by record
+//! ([`body`]). Must not know scenes or Embree.
 
 mod body;
+mod fast;
 
 use super::files::SceneFiles;
 use body::{AsciiBody, Body, element_error};
@@ -77,6 +80,26 @@ impl Scalar {
     fn is_integer(self) -> bool {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
+
+    /// The value in `raw` (exactly [`Scalar::size`] bytes) of either byte order.
+    #[inline]
+    fn decode(self, raw: &[u8], big: bool) -> f64 {
+        let mut b = [0u8; 8];
+        b[..raw.len()].copy_from_slice(raw);
+        if big {
+            b[..raw.len()].reverse();
+        }
+        match self {
+            Scalar::I8 => b[0] as i8 as f64,
+            Scalar::U8 => b[0] as f64,
+            Scalar::I16 => i16::from_le_bytes([b[0], b[1]]) as f64,
+            Scalar::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
+            Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::F64 => f64::from_le_bytes(b),
+        }
+    }
 }
 
 #[derive(Debug)]
@@ -147,7 +170,12 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
         match element.name.as_str() {
             "vertex" => {
                 vertex_count = Some(element.count);
-                read_vertices(&mut reader, element, &mut mesh)?;
+                let fast = (reader.binary_rest())
+                    .and_then(|(rest, big)| fast::vertices(rest, element, big, &mut mesh));
+                match fast {
+                    Some(used) => reader.advance(used),
+                    None => read_vertices(&mut reader, element, &mut mesh)?,
+                }
             }
             "face" => {
                 let Some(vertices) = vertex_count else {
@@ -157,7 +185,13 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
                         message: "faces come before any vertices".into(),
                     });
                 };
-                read_faces(&mut reader, element, vertices, &mut mesh)?;
+                let fast = (reader.binary_rest()).and_then(|(rest, big)| {
+                    fast::triangles(rest, element, vertices, big, &mut mesh)
+                });
+                match fast {
+                    Some(used) => reader.advance(used),
+                    None => read_faces(&mut reader, element, vertices, &mut mesh)?,
+                }
             }
             _ => {
                 for i in 0..element.count {

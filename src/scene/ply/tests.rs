@@ -110,3 +110,73 @@ fn header_and_body_mistakes_name_their_line() {
         assert!(err.message.contains(needle), "{to}: {err:?}");
     }
 }
+
+/// A random mesh of `vertices` (positions, normals, uv) and `faces` written as PLY in
+/// `format`: triangles, except a quad at each index in `quads`, and a corner `bad` (face,
+/// value) if given.
+fn random_ply(format: &str, faces: usize, quads: &[usize], bad: Option<(usize, u32)>) -> Vec<u8> {
+    let vertices = 1000;
+    let mut rng = crate::sampling::Rng::for_index(5, crate::sampling::Stream::Pixels, 0);
+    let header = format!(
+        "ply\nformat {format} 1.0\nelement vertex {vertices}\nproperty float x\n\
+         property float y\nproperty float z\nproperty float nx\nproperty float ny\n\
+         property float nz\nproperty float u\nproperty float v\nelement face {faces}\n\
+         property list uchar int vertex_indices\nend_header\n"
+    );
+    let big = format == "binary_big_endian";
+    let mut out = header.into_bytes();
+    let put = |out: &mut Vec<u8>, bytes: [u8; 4]| match big {
+        true => out.extend(bytes.iter().rev()),
+        false => out.extend(bytes),
+    };
+    for _ in 0..vertices {
+        let values: Vec<f32> = (0..8).map(|_| rng.next_f32() * 4.0 - 2.0).collect();
+        match format {
+            "ascii" => out.extend(format!("{values:?}\n").replace([',', '[', ']'], "").bytes()),
+            _ => values.iter().for_each(|v| put(&mut out, v.to_le_bytes())),
+        }
+    }
+    for f in 0..faces {
+        let n = if quads.contains(&f) { 4 } else { 3 };
+        let mut corners: Vec<u32> = (0..n).map(|_| rng.next_u32() % vertices).collect();
+        if let Some((_, v)) = bad.filter(|&(at, _)| at == f) {
+            corners[1] = v;
+        }
+        match format {
+            "ascii" => out.extend(
+                format!("{n} {corners:?}\n")
+                    .replace([',', '[', ']'], "")
+                    .bytes(),
+            ),
+            _ => {
+                out.push(n as u8);
+                corners.iter().for_each(|c| put(&mut out, c.to_le_bytes()));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn binary_files_read_in_parallel_give_the_ascii_files_mesh() {
+    // ASCII is read record by record; binary all-triangle bodies in parallel, and a body with
+    // a quad falls back to the record-by-record reader. Every path gives the same mesh.
+    for quads in [&[][..], &[17, 1500][..]] {
+        let ascii = parse(&random_ply("ascii", 2000, quads, None)).unwrap();
+        assert_eq!(ascii.triangles.len(), 2000 + quads.len());
+        assert_eq!(ascii.uvs.as_ref().map(Vec::len), Some(1000));
+        for format in ["binary_little_endian", "binary_big_endian"] {
+            let binary = parse(&random_ply(format, 2000, quads, None)).unwrap();
+            assert_eq!(binary, ascii, "{format}, quads {quads:?}");
+        }
+    }
+}
+
+#[test]
+fn a_bad_index_in_a_binary_body_is_named_by_its_face() {
+    for format in ["binary_little_endian", "binary_big_endian"] {
+        let err = parse(&random_ply(format, 2000, &[], Some((1234, 1000)))).unwrap_err();
+        assert_eq!(err.field, "face[1234]", "{format}: {err:?}");
+        assert!(err.message.contains("vertex index 1000"), "{err:?}");
+    }
+}
