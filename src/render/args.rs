@@ -161,16 +161,14 @@ pub struct RenderArgs {
     pub global_photons: Option<usize>,
 
     /// Paths a pass may emit for its global map (0: until --global-photons are stored, at
-    /// most 4 paths a photon and at least 100000).
+    /// most 64 paths a photon and at least 1000000).
     ///
     /// Default: 100000 where the global map serves one diffuse object lit through its mirrors
     /// and glass and --global-photons is not given (most of such a map's paths store nothing:
     /// light that leaves an open floor leaves the scene, so filling 10000 photons took a
     /// million paths, a third of the torus knot's pass; with 30000 the sparse map's wide
-    /// discs, reaching past the floor's edges, darkened a test floor's light by 1.5%), else 0.
-    /// A closed room needs one or two paths a photon; under an open sky 4 a photon left
-    /// 0.72-0.87x the error of 64 at equal time. The map's flux is over the paths emitted, so a
-    /// short map is right, only sparser.
+    /// discs, reaching past the floor's edges, darkened a test floor's light by 1.5%), else 0. The map's flux is over the paths emitted,
+    /// so a short map is right, only noisier.
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           help_heading = headings::PHOTONS, hide_short_help = true)]
     pub global_paths: Option<u64>,

@@ -253,18 +253,6 @@ pub fn pass_target(info: &crate::photon::store::MapInfo, growth: &PhotonGrowth, 
     }
 }
 
-/// Paths a wanted global photon past which the map is left short, unless `--global-paths`
-/// says otherwise. A closed room stores a photon for every one or two paths and never comes
-/// near it; under an open sky most paths leave the scene, and filling the map cost up to 64
-/// paths a photon, nine tenths of the render (BENCHMARKS.md, "Open skies"). The map's flux is
-/// over the paths emitted, so a short map is right, only sparser.
-pub const GLOBAL_PATHS_PER_PHOTON: u64 = 4;
-
-/// The paths a pass's global map of `target` photons may emit by default.
-pub fn default_global_paths(target: u64) -> u64 {
-    target.saturating_mul(GLOBAL_PATHS_PER_PHOTON).max(100_000)
-}
-
 /// Traces the maps of pass `pass` (an interruption leaves them empty: check for it).
 pub fn trace_pass_maps(
     world: &World,
@@ -285,7 +273,6 @@ pub fn trace_pass_maps(
         let start = Instant::now();
         let max_paths = match info.kind {
             MapKind::Global { .. } if settings.global_paths > 0 => Some(settings.global_paths),
-            MapKind::Global { .. } => Some(default_global_paths(target)),
             _ => None,
         };
         let (map, volume, counts) =
