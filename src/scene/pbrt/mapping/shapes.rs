@@ -14,6 +14,7 @@ use super::{Mapper, param_error, require, value_error};
 use crate::scene::tessellate::quadrics::Quadric;
 use crate::scene::{Curves, Cutout, SceneError, Shape, Texture, TriangleMesh, ply, rules};
 use glam::{Mat3, Vec2, Vec3};
+use rayon::prelude::*;
 
 /// A bilinear patch whose fourth corner is further than this (relative to its size) from
 /// the plane of the other three is not flat, and two triangles would not be the patch.
@@ -270,51 +271,60 @@ impl Mapper<'_> {
                 format!("has {} normals for {} points", n.len(), positions.len()),
             ));
         }
+        // Each stage works in place and in parallel: a big mesh is never held twice.
         let ctm = shape.ctm;
-        let world: Vec<Vec3> = positions.iter().map(|p| ctm.transform_point3(*p)).collect();
-        if world.iter().any(|p| !p.is_finite()) {
+        let mut world = positions;
+        world
+            .par_iter_mut()
+            .for_each(|p| *p = ctm.transform_point3(*p));
+        if !world.par_iter().all(|p| p.is_finite()) {
             return Err(item.at.error("Shape", "a transformed vertex is not finite"));
         }
-        let normal_matrix = Mat3::from_mat4(ctm).inverse().transpose();
+        let normal_matrix = Mat3::from_mat4(ctm).inverse().transpose().as_dmat3();
         let world_normals = match normals {
             None => None,
-            Some(n) => {
-                let mut out = Vec::with_capacity(n.len());
-                for (i, n) in n.iter().enumerate() {
-                    // f64: a length squared past f32's range still has a direction.
-                    let w = (normal_matrix.as_dmat3() * n.as_dvec3())
-                        .normalize_or_zero()
-                        .as_vec3();
-                    if w == Vec3::ZERO || !w.is_finite() {
-                        return Err(value_error(
-                            item,
-                            "Shape",
-                            "N",
-                            format!("normal {i} is zero or not finite"),
-                        ));
-                    }
-                    out.push(w);
+            Some(mut n) => {
+                // f64: a length squared past f32's range still has a direction.
+                (n.par_iter_mut()).for_each(|n| {
+                    *n = (normal_matrix * n.as_dvec3()).normalize_or_zero().as_vec3()
+                });
+                let bad = |w: &Vec3| *w == Vec3::ZERO || !w.is_finite();
+                if let Some(i) = n.par_iter().position_first(bad) {
+                    return Err(value_error(
+                        item,
+                        "Shape",
+                        "N",
+                        format!("normal {i} is zero or not finite"),
+                    ));
                 }
-                Some(out)
+                Some(n)
             }
         };
         let swaps_handedness = Mat3::from_mat4(ctm).determinant() < 0.0;
         let flip_all = shape.reverse_orientation ^ swaps_handedness;
-        let mut kept = Vec::with_capacity(triangles.len());
-        for [a, b, c] in triangles {
-            if rules::has_zero_area(&world, [a, b, c]) {
-                self.report.degenerate_triangles_dropped += 1;
-                continue;
-            }
-            let face = (world[b as usize] - world[a as usize])
-                .cross(world[c as usize] - world[a as usize]);
-            // pbrt turns the geometric normal towards the shading normal when there is one.
-            let flip = match &world_normals {
-                Some(n) => face.dot(n[a as usize] + n[b as usize] + n[c as usize]) < 0.0,
-                None => flip_all,
-            };
-            kept.push(if flip { [a, c, b] } else { [a, b, c] });
-        }
+        let mut kept = triangles;
+        let area: Vec<bool> = (kept.par_iter_mut())
+            .map(|t| {
+                let [a, b, c] = *t;
+                if rules::has_zero_area(&world, [a, b, c]) {
+                    return false;
+                }
+                let face = (world[b as usize] - world[a as usize])
+                    .cross(world[c as usize] - world[a as usize]);
+                // pbrt turns the geometric normal towards the shading normal when there is one.
+                let flip = match &world_normals {
+                    Some(n) => face.dot(n[a as usize] + n[b as usize] + n[c as usize]) < 0.0,
+                    None => flip_all,
+                };
+                if flip {
+                    *t = [a, c, b];
+                }
+                true
+            })
+            .collect();
+        let mut has_area = area.iter();
+        kept.retain(|_| *has_area.next().unwrap());
+        self.report.degenerate_triangles_dropped += area.len() - kept.len();
         if kept.is_empty() {
             return Err(item
                 .at
