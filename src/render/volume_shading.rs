@@ -124,16 +124,17 @@ impl Integrator<'_> {
             let found = &mut scratch.beam;
             let rng = &mut sampler.rng;
             let span = (s.t0, s.t1);
-            let walls = SegmentWalls {
-                start: match s.t0 > 0.0 {
+            let walls = SegmentWalls::new(
+                match s.t0 > 0.0 {
                     true => s.entered_through,
                     false => start.surface_normal,
                 },
-                end: match s.t1 < t_max {
+                match s.t1 < t_max {
                     true => s.left_through,
                     false => end_normal,
                 },
-            };
+                dir,
+            );
             if let (true, Some(map)) = (reads_photons, self.volume.caustic) {
                 let l = beam::in_scattered(map, m, origin, dir, span, &walls, rng, found);
                 out.in_scattered.caustic += tr * l;

@@ -440,8 +440,7 @@ impl Shape {
     pub fn bounds(&self) -> (Vec3, Vec3) {
         match self {
             Shape::Sphere { center, radius, .. } => (*center - *radius, *center + *radius),
-            Shape::Triangles(mesh) => (mesh.positions.iter())
-                .fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p))),
+            Shape::Triangles(mesh) => mesh.bounds(),
             Shape::Curves(curves) => curves.bounds(),
         }
     }
@@ -488,6 +487,13 @@ pub struct TriangleMesh {
     pub material: u32,
     /// Where the mesh is cut away, read at the hit's texture coordinates.
     pub cutout: Option<Cutout>,
+}
+
+impl TriangleMesh {
+    /// The corners of a box around the mesh.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        (self.positions.iter()).fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p)))
+    }
 }
 
 /// A scene error names the file, the line (when known) and the field.

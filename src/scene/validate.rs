@@ -503,7 +503,7 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
                 ..
             } => Some((l, *corner + 0.5 * (*edge_u + *edge_v))),
             Light::Mesh { mesh, .. } => {
-                let (lo, hi) = bounds(&mesh.positions);
+                let (lo, hi) = mesh.bounds();
                 Some((l, 0.5 * (lo + hi)))
             }
             Light::Distant { .. } | Light::Environment { .. } | Light::EnvironmentMap(_) => None,
@@ -527,7 +527,7 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
                 (Box::new(inside), "an opaque sphere")
             }
             Shape::Triangles(mesh) if opaque(mesh.material) => {
-                let (lo, hi) = bounds(&mesh.positions);
+                let (lo, hi) = mesh.bounds();
                 let within = move |p: Vec3| p.cmpge(lo).all() && p.cmple(hi).all();
                 if !lights.iter().any(|&(_, at)| within(at)) || !is_closed(mesh) {
                     continue;
@@ -551,13 +551,6 @@ pub(crate) fn enclosed_light_warnings(scene: &super::SceneDescription) -> Vec<St
         }
     }
     warnings
-}
-
-/// The box around `points`.
-fn bounds(points: &[Vec3]) -> (Vec3, Vec3) {
-    (points.iter()).fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| {
-        (lo.min(p), hi.max(p))
-    })
 }
 
 /// Every edge shared by exactly two triangles (vertices compared by position, since OBJ

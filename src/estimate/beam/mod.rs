@@ -57,7 +57,7 @@ pub fn in_scattered(
         };
         let kernel = match walls.is_empty() {
             true => kernel,
-            false => kernel / kept_share(walls, dir, (t0, on.t, t1), on.radius, on.shape),
+            false => kernel / kept_share(walls, (t0, on.t, t1), on.radius, on.shape),
         };
         if kernel > 0.0 {
             // The eye looks back along −dir; the photon's light arrives from −direction.

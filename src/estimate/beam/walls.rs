@@ -11,48 +11,71 @@ use crate::estimate::kernel::{epanechnikov_share_below, projected_ball_share_bel
 use crate::photon::volume::KernelEllipsoid;
 use glam::{DVec3, Vec3};
 
-/// The surfaces at the ends of a camera segment in a medium, by their unit normals (either
-/// side): `None` where the segment starts at the camera, runs on into the same medium, or
-/// leaves the scene.
+/// The surfaces at the ends of a camera segment in a medium, as the segment's ray sees them:
+/// `None` where the segment starts at the camera, runs on into the same medium, or leaves
+/// the scene.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SegmentWalls {
-    pub start: Option<Vec3>,
-    pub end: Option<Vec3>,
+    start: Option<Wall>,
+    end: Option<Wall>,
+}
+
+/// A wall seen from a ray: how it slants to the ray, and the way to it across the ray. The
+/// same for every photon along the segment, so worked out once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Wall {
+    /// |cos| and sin of the angle between the wall's normal and the ray.
+    cos: f32,
+    sin: f32,
+    /// The unit way to the wall within the kernel's plane (across the ray).
+    toward: Vec3,
 }
 
 impl SegmentWalls {
+    /// The walls of unit normals (either side) `start` and `end` for the ray `dir` (unit).
+    pub fn new(start: Option<Vec3>, end: Option<Vec3>, dir: Vec3) -> Self {
+        let wall = |n: Vec3| {
+            let cos = n.dot(dir);
+            let across = n - cos * dir;
+            let sin = across.length();
+            Wall {
+                cos: cos.abs(),
+                sin,
+                toward: across / sin,
+            }
+        };
+        Self {
+            start: start.map(wall),
+            end: end.map(wall),
+        }
+    }
+
     pub fn is_empty(&self) -> bool {
         self.start.is_none() && self.end.is_none()
     }
 }
 
-/// The share of a photon's kernel that the walls leave inside, the kernel centred on the ray
-/// `dir` (unit) at `t` of the segment `t0..t1`: `radius` for a round disc, or its ellipsoid.
+/// The share of a photon's kernel that the walls leave inside, the kernel centred on the
+/// segment's ray at `t` of `t0..t1`: `radius` for a round disc, or its ellipsoid.
 pub fn kept_share(
     walls: &SegmentWalls,
-    dir: Vec3,
     (t0, t, t1): (f32, f32, f32),
     radius: f32,
     shape: Option<&KernelEllipsoid>,
 ) -> f32 {
     let mut share = 1.0f32;
-    for (normal, distance) in [(walls.start, t - t0), (walls.end, t1 - t)] {
-        let Some(n) = normal else { continue };
-        let cos = n.dot(dir);
-        // Within the kernel's plane (across the ray), the way to the wall and how far it is.
-        let across = n - cos * dir;
-        let sin = across.length();
-        let gap = distance.max(0.0) * cos.abs();
-        // The kernel lies within its sphere: a wall past that leaves all of it.
-        if gap >= radius * sin {
+    for (wall, distance) in [(walls.start, t - t0), (walls.end, t1 - t)] {
+        let Some(wall) = wall else { continue };
+        let gap = distance.max(0.0) * wall.cos;
+        // The kernel lies within its sphere: a wall past that leaves all of it (and one the
+        // ray meets head on, sin 0, always does).
+        if gap >= radius * wall.sin {
             continue;
         }
-        let gap = (gap / sin) as f64;
+        let gap = (gap / wall.sin) as f64;
         share *= match shape {
             None => epanechnikov_share_below(gap / radius as f64),
-            Some(shape) => {
-                projected_ball_share_below(gap / reach(shape, (across / sin).as_dvec3()))
-            }
+            Some(shape) => projected_ball_share_below(gap / reach(shape, wall.toward.as_dvec3())),
         } as f32;
     }
     share
@@ -95,10 +118,7 @@ mod tests {
         let dir = Vec3::new(0.3, 0.0, -1.0).normalize();
         let t1 = 1.0 / dir.x;
         let origin = Vec3::new(-1.0, 0.0, 0.0);
-        let walls = SegmentWalls {
-            start: None,
-            end: Some(wall),
-        };
+        let walls = SegmentWalls::new(None, Some(wall), dir);
         let shape = ellipsoid(
             [
                 DVec3::X,
@@ -132,7 +152,7 @@ mod tests {
                             continue;
                         }
                         let s = shaped.then_some(&shape);
-                        let kept = kept_share(&walls, dir, (0.0, t, t1), 0.2, s);
+                        let kept = kept_share(&walls, (0.0, t, t1), 0.2, s);
                         // Only the last stretch, where the wall cuts the kernels, and away
                         // from the segment's start (no photons before it).
                         if t > t1 - 1.2 {
@@ -154,15 +174,9 @@ mod tests {
 
     #[test]
     fn no_wall_or_a_wall_the_ray_meets_head_on_keeps_everything() {
-        let walls = SegmentWalls {
-            start: None,
-            end: Some(Vec3::Z),
-        };
-        assert_eq!(
-            kept_share(&walls, Vec3::Z, (0.0, 0.99, 1.0), 0.1, None),
-            1.0
-        );
+        let walls = SegmentWalls::new(None, Some(Vec3::Z), Vec3::Z);
+        assert_eq!(kept_share(&walls, (0.0, 0.99, 1.0), 0.1, None), 1.0);
         let none = SegmentWalls::default();
-        assert_eq!(kept_share(&none, Vec3::X, (0.0, 0.99, 1.0), 0.1, None), 1.0);
+        assert_eq!(kept_share(&none, (0.0, 0.99, 1.0), 0.1, None), 1.0);
     }
 }
