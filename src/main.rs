@@ -24,7 +24,7 @@ struct Cli {
 enum Command {
     /// Render a scene: photon tracing (caustic and global maps), the chosen caustic estimate,
     /// and a Whitted-style eye pass; ends with a per-phase timing table.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Estimate a 2-D photon distribution (photons in the plane z = 0) on a grid: from a CSV
     /// file, or from a built-in distribution whose exact density is known, in which case the
     /// error against it is reported (the paper's Figures 4-6).

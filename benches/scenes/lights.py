@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Writes the many-lights and open-floor benchmarks (BENCHMARKS.md, "Open skies"): a matte
-floor, a glass ball and a matte ball under N point lights of the same total power, spread on a
-grid 4 units above the floor, the sky open (black) around them.
+"""Writes the many-lights and open-floor benchmarks (BENCHMARKS.md, "Many lights" and "Open
+skies"): a matte floor, a glass ball and a matte ball under N point lights of the same total
+power, spread on a grid 4 units above the floor, the sky open (black) around them.
 
     benches/scenes/lights.py OUT_DIR [N ...]   (default 1 16 256 4096)
 

@@ -431,15 +431,19 @@ fn advance(
 
 /// A Lambert bounce off `position` (unit normal `ns` on the side the photon came from): the
 /// direction and its weight cos θ/(π·pdf). Drawn by the cosine, or with probability
-/// [`World::diffuse_bounce_aim`] towards the caustic targets (uniformly over their cones),
+/// [`World::diffuse_bounce_aim`] towards the caustic targets (in an open scene, the objects
+/// whose bounds do not hold `position`: [`World::bounce_targets`]; uniformly over their cones),
 /// the density the mixture of both; `None` when the aimed direction leaves below the surface.
 #[inline(always)]
 fn diffuse_bounce(world: &World, position: Vec3, ns: Vec3, rng: &mut Rng) -> Option<(Vec3, f32)> {
     let aim = world.diffuse_bounce_aim;
-    let cones = (aim > 0.0)
-        .then(|| UnionOfCones::towards(&world.caustic_targets, position))
-        .flatten()
-        .filter(|cones| !cones.behind(ns));
+    let cones = match &world.bounce_targets {
+        _ if aim <= 0.0 => None,
+        // An open scene: towards the other objects, whose bounds do not hold the bounce.
+        Some(objects) => UnionOfCones::towards_those_outside(objects, position),
+        None => UnionOfCones::towards(&world.caustic_targets, position),
+    }
+    .filter(|cones| !cones.behind(ns));
     let Some(cones) = cones else {
         return Some((cosine_hemisphere(ns, rng.next_2d()), 1.0));
     };

@@ -173,6 +173,15 @@ pub struct RenderArgs {
           help_heading = headings::PHOTONS, hide_short_help = true)]
     pub global_paths: Option<u64>,
 
+    /// Treat an open scene as a closed one: no probe, global photons bounce by the cosine
+    /// alone and the global map keeps its size.
+    ///
+    /// By default a scene whose global paths mostly leave it aims half its global bounces at
+    /// its objects and sizes its global map by its share of the image (docs/guide.md, "Open
+    /// scenes").
+    #[arg(long, help_heading = headings::PHOTONS, hide_short_help = true)]
+    pub no_open_scene: bool,
+
     /// Pilot caustic paths traced once per render to aim the caustic photons (0: off).
     ///
     /// At most 128 per cell of the lights' cones, 64 cells a cone: they learn where each
@@ -225,6 +234,15 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_LIGHT_SAMPLES,
           allow_negative_numbers = true, help_heading = headings::EYE, hide_short_help = true)]
     pub light_samples: u32,
+
+    /// Bounded lights up to which each diffuse eye hit samples every light.
+    ///
+    /// Past it a hit draws `--light-samples` lights from a light tree, by what each can give
+    /// it (power, distance, facing), so its cost no longer grows with the lights. Lights at
+    /// infinity are sampled at every hit either way.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_EVERY_LIGHT_MAX,
+          help_heading = headings::EYE, hide_short_help = true)]
+    pub every_light_max: usize,
 
     /// Glass hits along an eye path that follow both the reflected and the refracted ray.
     ///
@@ -446,6 +464,9 @@ pub const DEFAULT_LONE_GLOBAL_PATHS: u64 = 100_000;
 /// Shadow rays per area light at each diffuse eye hit by default (docs/guide.md,
 /// "Choosing settings").
 pub const DEFAULT_LIGHT_SAMPLES: u32 = 4;
+/// Bounded lights up to which every diffuse eye hit samples each by default (docs/guide.md,
+/// "Many lights").
+pub const DEFAULT_EVERY_LIGHT_MAX: usize = crate::world::lights::sampler::SAMPLE_EVERY_LIGHT_MAX;
 /// Glass hits that split an eye path by default (BENCHMARKS.md, "Whole scenes and the defaults").
 pub const DEFAULT_GLASS_SPLIT_DEPTH: u32 = 1000;
 /// Emission samples per flagged pixel and pass by default (docs/guide.md, "Choosing settings").

@@ -4,11 +4,12 @@
 //! rough enough to read photons read the caustic map, each photon weighed by f for its
 //! direction, and sample the rest of their light by one ray that leaves the caustic map's
 //! paths to it ([`Emission::CausticMap`]); followed lobes are sampled by one ray, as a
-//! mirror is. Direct light comes from shadow rays over every non-delta lobe, weighed against
-//! each sampled part's own samples by multiple importance sampling (the balance heuristic,
-//! counting each light's samples). Part of [`Integrator`]; owns that split, must not build
-//! maps or touch pixels.
+//! mirror is. Direct light comes from shadow rays over every non-delta lobe
+//! (`super::direct_light`), weighed against each sampled part's own samples by multiple
+//! importance sampling (the balance heuristic, counting each light's samples). Part of
+//! [`Integrator`]; owns that split, must not build maps or touch pixels.
 
+use super::direct_light::{At, Sampled, balance};
 use super::gather::Reception;
 use super::integrator::{Emission, Integrator, Radiance, RayStart};
 use crate::bsdf::{Bsdf, Model, Part};
@@ -17,42 +18,6 @@ use crate::sampling::{Frame, PathSampler};
 use crate::scene::MediumId;
 use crate::world::{Interaction, Surface};
 use glam::Vec3;
-
-/// The balance heuristic's weight of a strategy of density `pdf` against another of `other`.
-#[inline]
-fn balance(pdf: f32, other: f32) -> f32 {
-    if pdf.is_infinite() {
-        1.0
-    } else if pdf + other > 0.0 {
-        pdf / (pdf + other)
-    } else {
-        0.0
-    }
-}
-
-/// Where a BSDF hit is and how it is seen.
-struct At<'h> {
-    hit: &'h Interaction,
-    frame: Frame,
-    wo: Vec3,
-    /// Off the surface on the side the ray came from.
-    p: Vec3,
-    /// Off the surface on the other side, where lights are sampled through a followed lobe
-    /// that spreads transmitted light (rough glass); `None` where none is.
-    back: Option<Vec3>,
-    /// The geometric and shading normals facing the ray.
-    ng: Vec3,
-    ns: Vec3,
-    /// The medium the ray arrived in.
-    medium: Option<MediumId>,
-}
-
-/// Which sampled parts of a BSDF direct light is weighed against.
-#[derive(Clone, Copy)]
-struct Sampled {
-    glossy: bool,
-    followed: bool,
-}
 
 impl Integrator<'_> {
     #[allow(clippy::too_many_arguments)]
@@ -200,6 +165,7 @@ impl Integrator<'_> {
             Some(_) => balance(s.pdf, self.samples_of(light) * light_pdf),
             None => 1.0,
         };
+        let from_side = from;
         let from = from.unwrap_or(at.p);
         let found = self.world.intersect(origin, next, 0.0, f32::INFINITY);
         // Through media the sample goes on as a camera ray does: what lies at its end is
@@ -244,9 +210,19 @@ impl Integrator<'_> {
             }
             let light = &self.world.light_sources[l];
             let emitted = light.emitted_radiance(-next.dot(found.geometric_normal));
-            let light_pdf = light.incident_pdf(from, facing, next, found.t, found.geometric_normal);
+            let weigh = match (&from_side, self.world.light_sampler.samples_every_light()) {
+                (None, _) => 1.0,
+                (Some(_), true) => {
+                    let light_pdf =
+                        light.incident_pdf(from, facing, next, found.t, found.geometric_normal);
+                    mis(light_pdf, light)
+                }
+                (Some(_), false) => {
+                    self.drawn_emitter_weight(at, (from, facing, next), s.pdf, &found)
+                }
+            };
             return seen_through(Radiance {
-                direct: weight * emitted * mis(light_pdf, light),
+                direct: weight * emitted * weigh,
                 ..Radiance::default()
             });
         }
@@ -262,111 +238,5 @@ impl Integrator<'_> {
             return seen_through(Radiance::default());
         }
         seen_through(weight * self.shade(&found, next, end, depth + 1, after, sampler, scratch))
-    }
-
-    /// Shadow rays a light takes at each hit.
-    fn samples_of(&self, light: &crate::world::lights::LightSource) -> f32 {
-        if light.is_delta() {
-            1.0
-        } else {
-            self.light_samples.max(1) as f32
-        }
-    }
-
-    /// Reflected direct radiance at `at`: every non-delta lobe by shadow rays (the followed
-    /// lobes only when `followed_lit`), each `sampled` part's share weighed against its own
-    /// samples. Light from the other side reaches the transmitting lobes by their own samples
-    /// alone.
-    fn direct_bsdf(
-        &self,
-        at: &At,
-        bsdf: &Bsdf,
-        sampled: Sampled,
-        followed_lit: bool,
-        diffuse_hit: u32,
-        sampler: &mut PathSampler,
-    ) -> Vec3 {
-        let (p, n, wo) = (at.p, at.ns, at.wo);
-        let mut radiance = Vec3::ZERO;
-        for (l, light) in self.world.light_sources.iter().enumerate() {
-            let count = self.samples_of(light) as u32;
-            let mut sum = Vec3::ZERO;
-            for j in 0..count {
-                let u = sampler.light_2d(diffuse_hit, l, j, count);
-                if let Some(back) = at.back {
-                    sum += self.through_back(at, bsdf, sampled, light, back, (count, u), sampler);
-                }
-                let Some(s) = light.sample_incident(p, n, u) else {
-                    continue;
-                };
-                let wi = at.frame.to_local(s.direction);
-                if wi.z * wo.z <= 0.0 {
-                    continue;
-                }
-                let light_pdf = count as f32 * s.pdf;
-                let mut f = bsdf.f(wo, wi, Part::Broad);
-                for (part, is_sampled, is_lit) in [
-                    (Part::Glossy, sampled.glossy, true),
-                    (Part::Followed, sampled.followed, followed_lit),
-                ] {
-                    if !is_lit {
-                        continue;
-                    }
-                    let mut g = bsdf.f(wo, wi, part);
-                    if is_sampled && g != Vec3::ZERO {
-                        g *= balance(light_pdf, bsdf.pdf(wo, wi, part));
-                    }
-                    f += g;
-                }
-                if f.max_element() <= 0.0 {
-                    continue;
-                }
-                let tfar = s.distance * (1.0 - 1e-4);
-                let medium = self.medium_after(at.hit, s.direction, at.medium);
-                let seen = self.visibility(p, s.direction, tfar, medium, sampler);
-                if seen != Vec3::ZERO {
-                    sum += f * s.irradiance * wi.z.abs() * seen;
-                }
-            }
-            radiance += sum / count as f32;
-        }
-        radiance
-    }
-
-    /// One shadow-tested sample of `light` (one of `count`) from the far side `back`, through
-    /// the followed lobes that spread transmitted light, weighed against their own samples
-    /// where they are sampled.
-    #[allow(clippy::too_many_arguments)]
-    fn through_back(
-        &self,
-        at: &At,
-        bsdf: &Bsdf,
-        sampled: Sampled,
-        light: &crate::world::lights::LightSource,
-        back: Vec3,
-        (count, u): (u32, (f32, f32)),
-        sampler: &mut PathSampler,
-    ) -> Vec3 {
-        let Some(s) = light.sample_incident(back, -at.ns, u) else {
-            return Vec3::ZERO;
-        };
-        let wi = at.frame.to_local(s.direction);
-        if wi.z * at.wo.z >= 0.0 {
-            return Vec3::ZERO;
-        }
-        let mut f = bsdf.f(at.wo, wi, Part::Followed);
-        if sampled.followed && f != Vec3::ZERO {
-            f *= balance(count as f32 * s.pdf, bsdf.pdf(at.wo, wi, Part::Followed));
-        }
-        if f.max_element() <= 0.0 {
-            return Vec3::ZERO;
-        }
-        let tfar = s.distance * (1.0 - 1e-4);
-        let medium = self.medium_after(at.hit, s.direction, at.medium);
-        let seen = self.visibility(back, s.direction, tfar, medium, sampler);
-        if seen == Vec3::ZERO {
-            return Vec3::ZERO;
-        }
-        f * s.irradiance * wi.z.abs() * seen
     }
 }

@@ -81,17 +81,37 @@ pub fn landing_worth(
 }
 
 /// Irradiance at `p` (unit normal `n`) straight from the lights: one shadow-tested sample per
-/// light, mean over the channels.
-fn direct_irradiance(world: &World, p: Vec3, n: Vec3, rng: &mut Rng) -> f32 {
+/// light (past a few bounded lights, one drawn from the light tree for them all), mean over
+/// the channels.
+pub(super) fn direct_irradiance(world: &World, p: Vec3, n: Vec3, rng: &mut Rng) -> f32 {
     let origin = p + n * world.ray_epsilon_at(p);
-    let mut e = Vec3::ZERO;
-    for light in &world.light_sources {
-        let Some(s) = light.sample_incident(p, n, rng.next_2d()) else {
-            continue;
+    let lights = &world.light_sampler;
+    let seen = |light: &crate::world::lights::LightSource, part, u| {
+        let Some(s) = light.sample_incident_part(p, n, u, part) else {
+            return Vec3::ZERO;
         };
         let cos = n.dot(s.direction);
         if cos > 0.0 && !world.occluded(origin, s.direction, 0.0, s.distance * (1.0 - 1e-4)) {
-            e += s.irradiance * cos;
+            s.irradiance * cos
+        } else {
+            Vec3::ZERO
+        }
+    };
+    let mut e = Vec3::ZERO;
+    if lights.samples_every_light() {
+        for light in &world.light_sources {
+            e += seen(light, None, rng.next_2d());
+        }
+    } else {
+        for &l in lights.everywhere() {
+            e += seen(&world.light_sources[l], None, rng.next_2d());
+        }
+        if let Some((part, pmf)) = lights.sample(p, n, rng.next_f32()) {
+            e += seen(
+                &world.light_sources[part.light],
+                part.triangle,
+                rng.next_2d(),
+            ) / pmf;
         }
     }
     e.element_sum() / 3.0

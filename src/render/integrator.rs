@@ -16,7 +16,7 @@ use crate::photon::volume::VolumeMaps;
 use crate::sampling::{Frame, PathSampler};
 use crate::scene::Material;
 use crate::scene::MediumId;
-use crate::world::{Interaction, SHADING_AGREEMENT_MIN_COS, Surface, World};
+use crate::world::{Interaction, Surface, World};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -499,54 +499,6 @@ impl Integrator<'_> {
             dir = next;
         }
         chain
-    }
-
-    /// Direct irradiance at `p` (diffuse hit `at` of the path): the mean of `light_samples`
-    /// shadow-tested samples per area light and environment, stratified (see
-    /// [`PathSampler::light_2d`]), and one per point, spot or distant light, which have
-    /// nothing to stratify. As pbrt reflects light: from the side of the geometric normal
-    /// `ng` the path came from, weighed by the cosine to the shading normal `ns` (a shading
-    /// normal tilted far from the face, even lying in it, still sees that side's light).
-    fn direct(
-        &self,
-        p: Vec3,
-        (ng, ns): (Vec3, Vec3),
-        medium: Option<MediumId>,
-        at: u32,
-        sampler: &mut PathSampler,
-    ) -> Vec3 {
-        let mut e = Vec3::ZERO;
-        for (l, light) in self.world.light_sources.iter().enumerate() {
-            let count = if light.is_delta() {
-                1
-            } else {
-                self.light_samples.max(1)
-            };
-            let mut sum = Vec3::ZERO;
-            for j in 0..count {
-                let u = sampler.light_2d(at, l, j, count);
-                let sample = if ns.dot(ng) < SHADING_AGREEMENT_MIN_COS {
-                    light.sample_incident_wide(p, ng, u)
-                } else {
-                    light.sample_incident(p, ng, u)
-                };
-                let Some(s) = sample else {
-                    continue;
-                };
-                if ng.dot(s.direction) <= 0.0 {
-                    continue;
-                }
-                let cos = ns.dot(s.direction).abs();
-                // Stop short of the light's own surface.
-                let tfar = s.distance * (1.0 - 1e-4);
-                let seen = self.visibility(p, s.direction, tfar, medium, sampler);
-                if seen != Vec3::ZERO {
-                    sum += s.irradiance * cos * seen;
-                }
-            }
-            e += sum / count as f32;
-        }
-        e
     }
 }
 

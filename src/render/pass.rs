@@ -61,6 +61,9 @@ pub struct RenderSettings {
     /// the file when 0, so films that had no such limit keep their bytes.
     #[serde(default, skip_serializing_if = "no_path_limit")]
     pub global_paths: u64,
+    /// `--no-open-scene`: no open-scene probe. Left out of the file when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub no_open_scene: bool,
     /// Camera samples per pixel in each pass.
     pub spp: u32,
     pub max_depth: u32,
@@ -83,6 +86,14 @@ pub struct RenderSettings {
     pub irradiance_stride: usize,
     /// Shadow rays per area light at each diffuse eye hit.
     pub light_samples: u32,
+    /// Bounded lights up to which each diffuse eye hit samples every light; past it they are
+    /// drawn from the light tree. Left out of the file at its default, so films keep their
+    /// bytes.
+    #[serde(
+        default = "default_every_light_max",
+        skip_serializing_if = "is_default_every_light_max"
+    )]
+    pub every_light_max: usize,
     /// Glass hits below this depth follow both the reflected and the refracted ray; deeper
     /// ones follow one, chosen by the Fresnel reflectance.
     #[serde(default = "split_everywhere")]
@@ -128,6 +139,14 @@ fn default_volume_k() -> usize {
 
 fn is_default_volume_k(k: &usize) -> bool {
     *k == super::args::DEFAULT_VOLUME_K
+}
+
+fn default_every_light_max() -> usize {
+    super::args::DEFAULT_EVERY_LIGHT_MAX
+}
+
+fn is_default_every_light_max(n: &usize) -> bool {
+    *n == super::args::DEFAULT_EVERY_LIGHT_MAX
 }
 
 fn no_growth() -> PhotonGrowth {

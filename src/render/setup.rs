@@ -25,6 +25,7 @@ use crate::photon::tracer::MapKind;
 use crate::scene;
 use crate::timing::PhaseTimes;
 use crate::world::World;
+use crate::world::lights::sampler::LightSampler;
 use std::path::Path;
 
 /// Loads the scene (at `--resolution` if given, the vertical field of view or orthographic view
@@ -101,6 +102,11 @@ impl Wiring {
     ) -> Result<Self, RenderError> {
         let mut settings = render_settings(args, world);
         drop_an_empty_lone_global_map(&mut settings, args, world, times);
+        super::global_budget::size_for_an_open_scene(&mut settings, args, world, times);
+        if settings.every_light_max != crate::world::lights::sampler::SAMPLE_EVERY_LIGHT_MAX {
+            world.light_sampler =
+                LightSampler::with_limit(&world.light_sources, settings.every_light_max);
+        }
         super::caustic_guide::learn(world, &settings, args.seed, times);
         let wanted = wanted_maps(&settings, world);
         // The caustic map is largest in the last pass this run may render (a resumed film's
@@ -274,6 +280,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
             None if lone => DEFAULT_LONE_GLOBAL_PATHS,
             _ => 0,
         }),
+        no_open_scene: args.no_open_scene,
         spp: args.spp,
         max_depth: transport
             .eye_bounces()
@@ -286,6 +293,7 @@ fn render_settings(args: &RenderArgs, world: &World) -> RenderSettings {
             .then_some(args.volume_contrast),
         irradiance_stride: args.irradiance_stride,
         light_samples: args.light_samples,
+        every_light_max: args.every_light_max,
         glass_split_depth: args.glass_split_depth,
         emission_samples: args.emission_samples,
         light_images: !args.no_light_images,

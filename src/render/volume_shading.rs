@@ -179,7 +179,11 @@ impl Integrator<'_> {
         } else {
             FreeFlight::Passed { weight: Vec3::ZERO }
         };
-        for light in &self.world.light_sources {
+        let lights = &self.world.light_sampler;
+        let one_by_one = lights.one_by_one(self.world.light_sources.len());
+        let ray = (origin, dir, (t0, t1), medium);
+        for l in one_by_one {
+            let light = &self.world.light_sources[l];
             let count = if light.is_delta() {
                 1
             } else {
@@ -187,28 +191,58 @@ impl Integrator<'_> {
             };
             let mut from_light = Vec3::ZERO;
             for _ in 0..count {
-                let (t, weight) = match light.center() {
-                    Some(c) => {
-                        match self.equiangular_on(light, c, (origin, dir), (t0, t1), sampler) {
-                            Some((t, pdf)) => {
-                                let x = origin + t * dir;
-                                let tr = m.transmittance(origin, dir, t0, t, &mut sampler.rng);
-                                (t, tr * m.sigma_s_at(x) / pdf)
-                            }
-                            None => continue,
-                        }
-                    }
-                    None => match flight {
-                        FreeFlight::Scattered { t, weight } => (t, weight),
-                        FreeFlight::Passed { .. } => continue,
-                    },
-                };
-                let x = origin + t * dir;
-                from_light += weight * self.light_at(light, x, -dir, &phase, medium, sampler);
+                from_light += self.scattered_from(light, ray, flight, &phase, sampler);
             }
             sum += from_light / count as f32;
         }
-        sum
+        if lights.samples_every_light() {
+            return sum;
+        }
+        // Past a few lights, lights drawn by power: a ray's stretch has no one point to rank
+        // them from.
+        let draws = self.light_samples.max(1);
+        let mut drawn = Vec3::ZERO;
+        for j in 0..draws {
+            let pick = (j as f32 + sampler.rng.next_f32()) / draws as f32;
+            let Some((l, probability)) = lights.sample_by_power(pick) else {
+                continue;
+            };
+            let light = &self.world.light_sources[l];
+            drawn += self.scattered_from(light, ray, flight, &phase, sampler) / probability;
+        }
+        sum + drawn / draws as f32
+    }
+
+    /// One sample of the light `light` scatters towards the ray's origin from the stretch
+    /// `(t0, t1)` of `origin + t·dir` ([`Self::single_scattered`]).
+    fn scattered_from(
+        &self,
+        light: &LightSource,
+        (origin, dir, (t0, t1), medium): (Vec3, Vec3, (f32, f32), MediumId),
+        flight: FreeFlight,
+        phase: &crate::media::phase::HenyeyGreenstein,
+        sampler: &mut PathSampler,
+    ) -> Vec3 {
+        let Some(media) = &self.world.media else {
+            return Vec3::ZERO;
+        };
+        let m = media.medium(medium);
+        let (t, weight) = match light.center() {
+            Some(c) => match self.equiangular_on(light, c, (origin, dir), (t0, t1), sampler) {
+                Some((t, pdf)) => {
+                    let x = origin + t * dir;
+                    let tr = m.transmittance(origin, dir, t0, t, &mut sampler.rng);
+                    (t, tr * m.sigma_s_at(x) / pdf)
+                }
+                None => return Vec3::ZERO,
+            },
+            None => match flight {
+                FreeFlight::Scattered { t, weight } => (t, weight),
+                FreeFlight::Passed { .. } => return Vec3::ZERO,
+            },
+        };
+        let x = origin + t * dir;
+        weight * self.light_at(light, x, -dir, phase, medium, sampler)
     }
 
     /// A scattering point for `light` (centre `c`) on the stretch (`t0`, `t1`) of the ray,

@@ -178,6 +178,20 @@ impl UnionOfCones {
         union.aim(targets, origin).then_some(union)
     }
 
+    /// The cones from `origin` towards the targets that do not hold it; `None` when every
+    /// target holds it. The set depends on `origin` alone, so drawing from it and its
+    /// density agree at every point.
+    #[inline(always)]
+    pub fn towards_those_outside(targets: &[BoundingSphere], origin: Vec3) -> Option<Self> {
+        let mut union = Self::empty();
+        for target in targets {
+            if let Some(cone) = cone_towards(target, origin) {
+                union.push(cone);
+            }
+        }
+        (union.len > 0).then_some(union)
+    }
+
     /// Makes this the union of the cones from `origin` towards every target, in place (a
     /// light drawing a union per photon does not copy it around); false, and no union, where
     /// [`UnionOfCones::towards`] gives `None`.

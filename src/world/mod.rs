@@ -223,6 +223,8 @@ pub struct World {
     pub bounds: BoundingSphere,
     /// The scene's lights prepared for sampling, in [`SceneDescription::lights`]' order.
     pub light_sources: Vec<LightSource>,
+    /// Which lights a shading point samples: all of them, or draws from a light tree.
+    pub light_sampler: lights::sampler::LightSampler,
     /// What a ray that leaves the scene sees whatever its direction: the constant
     /// environments' radiance summed.
     background: Vec3,
@@ -236,6 +238,13 @@ pub struct World {
     /// The probability with which a global photon's diffuse bounce is aimed at the caustic
     /// targets instead of drawn by the cosine ([`World::diffuse_bounce_aim`]).
     pub diffuse_bounce_aim: f32,
+    /// Where an open scene's global photons aim their diffuse bounces: a sphere round each
+    /// object (`None`: at the caustic targets, as a lone object's do). Set with
+    /// [`World::aim_bounces_at_objects`].
+    pub bounce_targets: Option<Vec<BoundingSphere>>,
+    /// A sphere round each object, where the scene has at most [`aim::MAX_TARGETS`] objects
+    /// and no instances.
+    object_spheres: Vec<BoundingSphere>,
     /// By material id, whether it is a mix that reads photons
     /// ([`World::keeps_photon_on_mix`]); empty in a scene without mixes.
     mixes_reading_photons: Vec<bool>,
@@ -267,8 +276,10 @@ impl World {
         let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let (mut spec_lo, mut spec_hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
         let mut specular_shapes = Vec::new();
+        let mut object_spheres = Vec::new();
         for shape in &description.shapes {
             let (hit_normals, (a, b), material) = add_shape(&mut builder, shape)?;
+            object_spheres.push(BoundingSphere::around_box(a, b));
             surfaces.push(Surface::Material(material));
             normals.push(hit_normals);
             lo = lo.min(a);
@@ -430,11 +441,14 @@ impl World {
             caustic_guide: Vec::new(),
             scale,
             bounds,
+            light_sampler: lights::sampler::LightSampler::new(&light_sources),
             light_sources,
             background,
             sky_maps,
             glossy_min_alpha,
             diffuse_bounce_aim: 0.0,
+            bounce_targets: None,
+            object_spheres,
             media,
         };
         if world.lights_itself_alone() {
@@ -600,6 +614,19 @@ impl World {
     /// environment).
     pub fn has_sky_map(&self) -> bool {
         !self.sky_maps.is_empty()
+    }
+
+    /// Aims a share `aim` of the global photons' diffuse bounces at the scene's objects, for
+    /// an open scene where most bounces drawn by the cosine leave it; false (nothing changed)
+    /// where the scene has too many objects, instances or media to aim at.
+    pub fn aim_bounces_at_objects(&mut self, aim: f32) -> bool {
+        let few = (2..=aim::MAX_TARGETS).contains(&self.object_spheres.len());
+        if !few || !self.description.instances.is_empty() || self.media.is_some() {
+            return false;
+        }
+        self.bounce_targets = Some(self.object_spheres.clone());
+        self.diffuse_bounce_aim = aim;
+        true
     }
 
     /// Whether the scene's one diffuse object can only light itself through its mirrors,

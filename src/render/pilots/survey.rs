@@ -7,7 +7,7 @@ use super::pilot::{BranchCode, LastRay, Pilot, SPREAD_MARGIN, gap_to_sphere, nea
 use crate::optics::{fresnel_dielectric, reflect, refract};
 use crate::render::light_images::{self, Seed};
 use crate::scene::Material;
-use crate::world::lights::LightShape;
+use crate::world::lights::{LightShape, weight};
 use crate::world::{BoundingSphere, Surface, World};
 use glam::{Vec2, Vec3};
 
@@ -47,7 +47,11 @@ impl<'w> Survey<'w> {
     pub(super) fn new(world: &'w World, max_depth: u32) -> Self {
         let shapes: Vec<LightShape> = world.light_sources.iter().map(|l| l.shape()).collect();
         let visible = shapes.iter().flat_map(visible_bounds).collect();
-        let probes = shapes.iter().filter_map(shadow_probe).collect();
+        let probed = probed_lights(world);
+        let probes = (shapes.iter().zip(probed))
+            .filter(|(_, probed)| *probed)
+            .filter_map(|(shape, _)| shadow_probe(shape))
+            .collect();
         Self {
             world,
             max_depth,
@@ -222,6 +226,30 @@ impl<'w> Survey<'w> {
         }
         bits
     }
+}
+
+/// Power share below which a light drawn from the light tree gets no shadow probe: its
+/// shadow's edge is too faint to flag a pixel for.
+const MIN_PROBED_SHARE: f32 = 0.02;
+
+/// Which lights a pilot's shadow probes test: every light where each shading point samples
+/// every light; past that, the lights at infinity and those holding at least
+/// [`MIN_PROBED_SHARE`] of the bounded lights' power (among a thousand even lights no one
+/// shadow shows, and testing each would cost a thousand rays a pilot).
+fn probed_lights(world: &World) -> Vec<bool> {
+    let lights = &world.light_sampler;
+    if lights.samples_every_light() {
+        return vec![true; world.light_sources.len()];
+    }
+    let everywhere = lights.everywhere();
+    let power = |l: usize| weight(world.light_sources[l].power());
+    let bounded: f32 = (0..world.light_sources.len())
+        .filter(|l| !everywhere.contains(l))
+        .map(power)
+        .sum();
+    (0..world.light_sources.len())
+        .map(|l| everywhere.contains(&l) || power(l) >= MIN_PROBED_SHARE * bounded)
+        .collect()
 }
 
 /// Spheres whose union holds the part of a light the eye can see, hugging it closely enough

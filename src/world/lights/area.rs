@@ -364,6 +364,10 @@ impl MeshLight {
         self.area
     }
 
+    pub(super) fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
     pub(super) fn two_sided(&self) -> bool {
         self.two_sided
     }
@@ -481,6 +485,50 @@ impl MeshLight {
         }
         let (p, normal) = self.sample_point(u);
         flat_incident(p, normal, self.area, self.radiance(), self.two_sided, x)
+    }
+
+    /// Light arriving at `x` from triangle `k` alone: a point drawn uniformly over it (the
+    /// light tree picks the triangle).
+    pub(super) fn incident_on(
+        &self,
+        k: usize,
+        x: Vec3,
+        (u, v): (f32, f32),
+    ) -> Option<IncidentSample> {
+        let t = self.triangles.get(k)?;
+        let area = self.triangle_area(k);
+        let root = u.sqrt();
+        let p = t.corner + root * (1.0 - v) * t.edge_1 + root * v * t.edge_2;
+        flat_incident(p, t.normal, area, self.radiance(), self.two_sided, x)
+    }
+
+    /// Triangle `k`'s area.
+    pub(super) fn triangle_area(&self, k: usize) -> f32 {
+        let t = &self.triangles[k];
+        0.5 * t.edge_1.cross(t.edge_2).length()
+    }
+
+    /// The whole mesh's bounds for the light tree: its box, its normals every way.
+    pub(super) fn bounds(&self, phi: f32) -> super::tree::LightBounds {
+        let corners = (self.triangles.iter())
+            .flat_map(|t| [t.corner, t.corner + t.edge_1, t.corner + t.edge_2]);
+        let (lo, hi) = corners.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+        super::tree::LightBounds::everywhere(lo, hi, phi)
+    }
+
+    /// Each triangle's bounds for the light tree, its power its share of the mesh's.
+    pub(super) fn triangle_bounds(&self, phi: f32) -> Vec<super::tree::LightBounds> {
+        (self.triangles.iter().enumerate())
+            .map(|(k, t)| {
+                let corners = [t.corner, t.corner + t.edge_1, t.corner + t.edge_2];
+                let lo = corners[0].min(corners[1]).min(corners[2]);
+                let hi = corners[0].max(corners[1]).max(corners[2]);
+                let share = phi * self.triangle_area(k) / self.area;
+                super::tree::LightBounds::flat(lo, hi, share, t.normal, self.two_sided)
+            })
+            .collect()
     }
 
     /// A photon from a point drawn by area, cosine-weighted or aimed from that point.

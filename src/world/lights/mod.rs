@@ -12,8 +12,10 @@ mod area;
 mod environment_map;
 mod infinite;
 mod point;
+pub mod sampler;
 #[cfg(test)]
 mod tests;
+pub mod tree;
 
 use super::BoundingSphere;
 use super::aim_guide::{AimedCones, ConeCells};
@@ -76,6 +78,9 @@ pub enum LightShape {
     /// The environment: light from every direction.
     Everywhere,
 }
+
+/// Triangles of a mesh light past which the light tree holds it as one entry.
+pub const TREE_TRIANGLES_MAX: usize = 65_536;
 
 /// Triangles past which a mesh light's shape is one sphere round them all.
 pub const MESH_SPHERES: usize = 64;
@@ -313,6 +318,88 @@ impl LightSource {
             Kind::Environment(environment) => environment.incident(n, u),
             Kind::EnvironmentMap(map) => map.incident(n, u),
         }
+    }
+}
+
+/// The light tree's view of the lights.
+impl LightSource {
+    /// What the light tree holds of this light: one entry, or one per triangle of a mesh;
+    /// none for the lights at infinity, which every point sees alike.
+    pub fn tree_entries(&self) -> Vec<tree::LightBounds> {
+        let phi = weight(self.power());
+        match &self.0 {
+            Kind::Point { position, .. } => {
+                vec![tree::LightBounds::everywhere(*position, *position, phi)]
+            }
+            Kind::Spot(spot) => vec![spot.bounds()],
+            Kind::Sphere { center, radius, .. } => vec![tree::LightBounds::everywhere(
+                *center - *radius,
+                *center + *radius,
+                phi,
+            )],
+            Kind::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                ..
+            } => {
+                let corners = [*corner, *corner + *edge_u, *corner + *edge_v];
+                let far = *corner + *edge_u + *edge_v;
+                let lo = corners.iter().fold(far, |a, c| a.min(*c));
+                let hi = corners.iter().fold(far, |a, c| a.max(*c));
+                let normal = area::quad_area_normal(*edge_u, *edge_v).1;
+                vec![tree::LightBounds::flat(lo, hi, phi, normal, false)]
+            }
+            Kind::Mesh(mesh) if self.drawn_by_triangle() => mesh.triangle_bounds(phi),
+            Kind::Mesh(mesh) => vec![mesh.bounds(phi)],
+            Kind::Distant(_) | Kind::Environment(_) | Kind::EnvironmentMap(_) => Vec::new(),
+        }
+    }
+
+    /// [`LightSource::sample_incident`] from triangle `part` of a mesh light alone (`None`:
+    /// the whole light, as for every other kind).
+    pub fn sample_incident_part(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        u: (f32, f32),
+        part: Option<u32>,
+    ) -> Option<IncidentSample> {
+        match (&self.0, part) {
+            (Kind::Mesh(mesh), Some(k)) => mesh.incident_on(k as usize, x, u),
+            _ => self.sample_incident(x, n, u),
+        }
+    }
+
+    /// [`LightSource::incident_pdf`] for [`LightSource::sample_incident_part`]'s draws.
+    pub fn incident_pdf_part(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        (dir, distance): (Vec3, f32),
+        light_normal: Vec3,
+        part: Option<u32>,
+    ) -> f32 {
+        match (&self.0, part) {
+            (Kind::Mesh(mesh), Some(k)) if (k as usize) < mesh.triangle_count() => {
+                let cos = -dir.dot(light_normal);
+                let cos = if mesh.two_sided() { cos.abs() } else { cos };
+                let area = mesh.triangle_area(k as usize);
+                if cos > 0.0 && area > 0.0 {
+                    distance * distance / (cos * area)
+                } else {
+                    0.0
+                }
+            }
+            _ => self.incident_pdf(x, n, dir, distance, light_normal),
+        }
+    }
+
+    /// Whether the light tree holds this light's triangles one by one: a mesh light of at
+    /// most [`TREE_TRIANGLES_MAX`] triangles (a bigger one is one entry, drawn by area as
+    /// ever: its tree would cost more than it saves).
+    pub fn drawn_by_triangle(&self) -> bool {
+        matches!(&self.0, Kind::Mesh(mesh) if mesh.triangle_count() <= TREE_TRIANGLES_MAX)
     }
 }
 

@@ -144,6 +144,23 @@ impl Spot {
         self.power
     }
 
+    /// Its bounds for the light tree: the power it would have at full intensity every way
+    /// (the cone, not the power, says where it is dark), the axis, the falloff start as
+    /// the cone of full light and the rest of the cone as its spread.
+    pub(super) fn bounds(&self) -> super::tree::LightBounds {
+        let theta_start = self.cos_start.clamp(-1.0, 1.0).acos();
+        let theta_cone = self.cos_cone.clamp(-1.0, 1.0).acos();
+        super::tree::LightBounds {
+            lo: self.position,
+            hi: self.position,
+            phi: 4.0 * PI * super::weight(self.intensity),
+            axis: self.axis,
+            cos_normals: self.cos_start,
+            cos_emission: (theta_cone - theta_start).max(0.0).cos(),
+            two_sided: false,
+        }
+    }
+
     /// Intensity (W/sr) along unit `direction` leaving the light.
     #[inline]
     fn intensity(&self, direction: Vec3) -> Vec3 {

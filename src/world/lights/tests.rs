@@ -427,3 +427,56 @@ fn a_sky_sampled_wide_keeps_its_expectation_and_bounds_every_weight() {
     assert!(widest <= 4.0 * PI * 1.0001, "{widest}");
     assert!(narrow_widest > 100.0 * PI, "{narrow_widest}");
 }
+
+#[test]
+fn a_mesh_lights_triangles_drawn_one_by_one_sum_to_the_whole_light() {
+    let light = source(&Light::Mesh {
+        mesh: square_mesh(true),
+        power: Vec3::splat(5.0),
+        two_sided: false,
+    });
+    assert!(light.drawn_by_triangle());
+    assert_eq!(light.tree_entries().len(), 2);
+    let (x, n) = (Vec3::new(0.2, -0.1, 0.0), Vec3::Z);
+    let count = 64u32;
+    let irradiance = |part: Option<u32>| {
+        let mut sum = 0.0f64;
+        for i in 0..count * count {
+            let u = (
+                ((i % count) as f32 + 0.5) / count as f32,
+                ((i / count) as f32 + 0.5) / count as f32,
+            );
+            let s = light.sample_incident_part(x, n, u, part).unwrap();
+            let back = light.incident_pdf_part(x, n, (s.direction, s.distance), Vec3::NEG_Z, part);
+            assert!(
+                (back / s.pdf - 1.0).abs() < 1e-3,
+                "pdf {} against {back}",
+                s.pdf
+            );
+            sum += f64::from(s.irradiance.x * n.dot(s.direction));
+        }
+        sum / f64::from(count * count)
+    };
+    let whole = irradiance(None);
+    let parts = irradiance(Some(0)) + irradiance(Some(1));
+    assert!(
+        (parts / whole - 1.0).abs() < 2e-3,
+        "{parts} against {whole}"
+    );
+    // Past the limit a mesh is one entry of the tree, drawn by area.
+    let many = TREE_TRIANGLES_MAX as u32 + 1;
+    let big = TriangleMesh {
+        positions: (0..many + 2)
+            .map(|i| Vec3::new(i as f32 * 1e-3, (i % 2) as f32 * 1e-3, 2.0))
+            .collect(),
+        triangles: (0..many).map(|i| [i, i + 1, i + 2]).collect(),
+        ..square_mesh(true)
+    };
+    let light = source(&Light::Mesh {
+        mesh: big,
+        power: Vec3::splat(5.0),
+        two_sided: true,
+    });
+    assert!(!light.drawn_by_triangle());
+    assert_eq!(light.tree_entries().len(), 1);
+}
