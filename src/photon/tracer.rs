@@ -437,7 +437,7 @@ fn advance(
 #[inline(always)]
 fn diffuse_bounce(world: &World, position: Vec3, ns: Vec3, rng: &mut Rng) -> Option<(Vec3, f32)> {
     let aim = world.diffuse_bounce_aim;
-    let cones = match &world.bounce_targets {
+    let cones = match world.bounce_targets() {
         _ if aim <= 0.0 => None,
         // An open scene: towards the other objects, whose bounds do not hold the bounce.
         Some(objects) => UnionOfCones::towards_those_outside(objects, position),

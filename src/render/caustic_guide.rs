@@ -98,21 +98,14 @@ pub(super) fn direct_irradiance(world: &World, p: Vec3, n: Vec3, rng: &mut Rng) 
         }
     };
     let mut e = Vec3::ZERO;
-    if lights.samples_every_light() {
-        for light in &world.light_sources {
-            e += seen(light, None, rng.next_2d());
-        }
-    } else {
-        for &l in lights.everywhere() {
-            e += seen(&world.light_sources[l], None, rng.next_2d());
-        }
-        if let Some((part, pmf)) = lights.sample(p, n, rng.next_f32()) {
-            e += seen(
-                &world.light_sources[part.light],
-                part.triangle,
-                rng.next_2d(),
-            ) / pmf;
-        }
+    for l in lights.one_by_one(world.light_sources.len()) {
+        e += seen(&world.light_sources[l], None, rng.next_2d());
+    }
+    if !lights.samples_every_light()
+        && let Some((part, pmf)) = lights.sample(p, n, rng.next_f32())
+    {
+        let light = &world.light_sources[part.light];
+        e += seen(light, part.triangle, rng.next_2d()) / pmf;
     }
     e.element_sum() / 3.0
 }

@@ -25,7 +25,7 @@ use crate::photon::tracer::MapKind;
 use crate::scene;
 use crate::timing::PhaseTimes;
 use crate::world::World;
-use crate::world::lights::sampler::LightSampler;
+use crate::world::lights::sampler::{LightSampler, SAMPLE_EVERY_LIGHT_MAX};
 use std::path::Path;
 
 /// Loads the scene (at `--resolution` if given, the vertical field of view or orthographic view
@@ -103,7 +103,7 @@ impl Wiring {
         let mut settings = render_settings(args, world);
         drop_an_empty_lone_global_map(&mut settings, args, world, times);
         super::global_budget::size_for_an_open_scene(&mut settings, args, world, times);
-        if settings.every_light_max != crate::world::lights::sampler::SAMPLE_EVERY_LIGHT_MAX {
+        if settings.every_light_max != SAMPLE_EVERY_LIGHT_MAX {
             world.light_sampler =
                 LightSampler::with_limit(&world.light_sources, settings.every_light_max);
         }

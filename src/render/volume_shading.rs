@@ -9,8 +9,8 @@
 use super::integrator::{Integrator, Radiance, RayStart};
 use crate::estimate::beam::walls::SegmentWalls;
 use crate::estimate::{Scratch, beam};
-use crate::media::FreeFlight;
 use crate::media::equiangular::{equiangular, within_cone};
+use crate::media::{FreeFlight, Medium};
 use crate::sampling::PathSampler;
 use crate::scene::MediumId;
 use crate::world::Interaction;
@@ -181,14 +181,10 @@ impl Integrator<'_> {
         };
         let lights = &self.world.light_sampler;
         let one_by_one = lights.one_by_one(self.world.light_sources.len());
-        let ray = (origin, dir, (t0, t1), medium);
+        let ray = (origin, dir, (t0, t1), (medium, m));
         for l in one_by_one {
             let light = &self.world.light_sources[l];
-            let count = if light.is_delta() {
-                1
-            } else {
-                self.light_samples.max(1)
-            };
+            let count = self.samples_of(light) as u32;
             let mut from_light = Vec3::ZERO;
             for _ in 0..count {
                 from_light += self.scattered_from(light, ray, flight, &phase, sampler);
@@ -218,15 +214,11 @@ impl Integrator<'_> {
     fn scattered_from(
         &self,
         light: &LightSource,
-        (origin, dir, (t0, t1), medium): (Vec3, Vec3, (f32, f32), MediumId),
+        (origin, dir, (t0, t1), (medium, m)): (Vec3, Vec3, (f32, f32), (MediumId, &Medium)),
         flight: FreeFlight,
         phase: &crate::media::phase::HenyeyGreenstein,
         sampler: &mut PathSampler,
     ) -> Vec3 {
-        let Some(media) = &self.world.media else {
-            return Vec3::ZERO;
-        };
-        let m = media.medium(medium);
         let (t, weight) = match light.center() {
             Some(c) => match self.equiangular_on(light, c, (origin, dir), (t0, t1), sampler) {
                 Some((t, pdf)) => {

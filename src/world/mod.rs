@@ -238,12 +238,10 @@ pub struct World {
     /// The probability with which a global photon's diffuse bounce is aimed at the caustic
     /// targets instead of drawn by the cosine ([`World::diffuse_bounce_aim`]).
     pub diffuse_bounce_aim: f32,
-    /// Where an open scene's global photons aim their diffuse bounces: a sphere round each
-    /// object (`None`: at the caustic targets, as a lone object's do). Set with
-    /// [`World::aim_bounces_at_objects`].
-    pub bounce_targets: Option<Vec<BoundingSphere>>,
-    /// A sphere round each object, where the scene has at most [`aim::MAX_TARGETS`] objects
-    /// and no instances.
+    /// Whether the global photons' aimed bounces go towards the objects (an open scene,
+    /// [`World::aim_bounces_at_objects`]) rather than the caustic targets.
+    bounces_aim_at_objects: bool,
+    /// A sphere round each shape.
     object_spheres: Vec<BoundingSphere>,
     /// By material id, whether it is a mix that reads photons
     /// ([`World::keeps_photon_on_mix`]); empty in a scene without mixes.
@@ -447,7 +445,7 @@ impl World {
             sky_maps,
             glossy_min_alpha,
             diffuse_bounce_aim: 0.0,
-            bounce_targets: None,
+            bounces_aim_at_objects: false,
             object_spheres,
             media,
         };
@@ -624,9 +622,16 @@ impl World {
         if !few || !self.description.instances.is_empty() || self.media.is_some() {
             return false;
         }
-        self.bounce_targets = Some(self.object_spheres.clone());
+        self.bounces_aim_at_objects = true;
         self.diffuse_bounce_aim = aim;
         true
+    }
+
+    /// Where an open scene's global photons aim their diffuse bounces: a sphere round each
+    /// object; `None` where they aim at the caustic targets (a lone object's) or not at all.
+    pub fn bounce_targets(&self) -> Option<&[BoundingSphere]> {
+        self.bounces_aim_at_objects
+            .then_some(self.object_spheres.as_slice())
     }
 
     /// Whether the scene's one diffuse object can only light itself through its mirrors,

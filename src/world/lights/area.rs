@@ -348,6 +348,16 @@ struct Triangle {
     normal: Vec3,
 }
 
+impl Triangle {
+    /// The point the pair `(u, v)` picks, uniformly over the triangle.
+    #[inline]
+    fn point(&self, (u, v): (f32, f32)) -> Vec3 {
+        let root = u.sqrt();
+        let (b1, b2) = (root * (1.0 - v), root * v);
+        self.corner + b1 * self.edge_1 + b2 * self.edge_2
+    }
+}
+
 /// A mesh light's triangles, drawn by area.
 #[derive(Clone, Debug)]
 pub(super) struct MeshLight {
@@ -473,9 +483,7 @@ impl MeshLight {
             u
         };
         let t = &self.triangles[k];
-        let root = u.sqrt();
-        let (b1, b2) = (root * (1.0 - v), root * v);
-        (t.corner + b1 * t.edge_1 + b2 * t.edge_2, t.normal)
+        (t.point((u, v)), t.normal)
     }
 
     /// Light arriving at `x`: a point drawn uniformly over the mesh.
@@ -489,17 +497,17 @@ impl MeshLight {
 
     /// Light arriving at `x` from triangle `k` alone: a point drawn uniformly over it (the
     /// light tree picks the triangle).
-    pub(super) fn incident_on(
-        &self,
-        k: usize,
-        x: Vec3,
-        (u, v): (f32, f32),
-    ) -> Option<IncidentSample> {
+    pub(super) fn incident_on(&self, k: usize, x: Vec3, u: (f32, f32)) -> Option<IncidentSample> {
         let t = self.triangles.get(k)?;
         let area = self.triangle_area(k);
-        let root = u.sqrt();
-        let p = t.corner + root * (1.0 - v) * t.edge_1 + root * v * t.edge_2;
-        flat_incident(p, t.normal, area, self.radiance(), self.two_sided, x)
+        flat_incident(
+            t.point(u),
+            t.normal,
+            area,
+            self.radiance(),
+            self.two_sided,
+            x,
+        )
     }
 
     /// Triangle `k`'s area.

@@ -321,6 +321,19 @@ impl LightSource {
     }
 }
 
+/// The solid-angle density of a point drawn uniformly over a flat emitter of `area` (both
+/// sides when `two_sided`), seen along `dir` at `distance` where its normal is
+/// `light_normal`.
+fn flat_pdf((dir, distance): (Vec3, f32), light_normal: Vec3, area: f32, two_sided: bool) -> f32 {
+    let cos = -dir.dot(light_normal);
+    let cos = if two_sided { cos.abs() } else { cos };
+    if cos > 0.0 && area > 0.0 {
+        distance * distance / (cos * area)
+    } else {
+        0.0
+    }
+}
+
 /// The light tree's view of the lights.
 impl LightSource {
     /// What the light tree holds of this light: one entry, or one per triangle of a mesh;
@@ -382,14 +395,8 @@ impl LightSource {
     ) -> f32 {
         match (&self.0, part) {
             (Kind::Mesh(mesh), Some(k)) if (k as usize) < mesh.triangle_count() => {
-                let cos = -dir.dot(light_normal);
-                let cos = if mesh.two_sided() { cos.abs() } else { cos };
                 let area = mesh.triangle_area(k as usize);
-                if cos > 0.0 && area > 0.0 {
-                    distance * distance / (cos * area)
-                } else {
-                    0.0
-                }
+                flat_pdf((dir, distance), light_normal, area, mesh.two_sided())
             }
             _ => self.incident_pdf(x, n, dir, distance, light_normal),
         }
@@ -440,15 +447,8 @@ impl LightSource {
         distance: f32,
         light_normal: Vec3,
     ) -> f32 {
-        let flat = |area: f32, two_sided: bool| {
-            let cos = -dir.dot(light_normal);
-            let cos = if two_sided { cos.abs() } else { cos };
-            if cos > 0.0 && area > 0.0 {
-                distance * distance / (cos * area)
-            } else {
-                0.0
-            }
-        };
+        let flat =
+            |area: f32, two_sided: bool| flat_pdf((dir, distance), light_normal, area, two_sided);
         match &self.0 {
             Kind::Point { .. } | Kind::Spot(_) | Kind::Distant(_) => 0.0,
             Kind::Sphere { center, radius, .. } => {
