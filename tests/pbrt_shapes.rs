@@ -27,7 +27,7 @@ fn load(world: &str) -> (Vec<Shape>, Vec<Light>) {
 
 fn only_mesh(world: &str) -> TriangleMesh {
     match &load(world).0[..] {
-        [Shape::Triangles(mesh)] => mesh.clone(),
+        [Shape::Triangles(mesh)] => (**mesh).clone(),
         other => panic!("{world}: {other:?}"),
     }
 }
@@ -154,4 +154,47 @@ fn a_disk_can_emit() {
         "{power}"
     );
     assert!(faces(mesh).iter().all(|(n, _)| n.z > 0.0));
+}
+
+#[test]
+fn the_world_reads_loaded_meshes_in_place_and_shades_them_from_the_same_buffers() {
+    // A textured quad with vertex normals and (u, v), over the floor `load` adds.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("smooth.pbrt");
+    let text = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\nWorldBegin\n\
+        LightSource \"point\" \"point from\" [0 0 4] \"rgb I\" [10 10 10]\n\
+        Texture \"checks\" \"spectrum\" \"checkerboard\"\n\
+        Material \"matte\" \"texture Kd\" \"checks\"\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n\
+          \"point3 P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0]\n\
+          \"normal N\" [0 0 1  0.6 0 0.8  0 0.6 0.8  0 0 1]\n\
+          \"float uv\" [0 0  1 0  1 1  0 1]\n\
+        Shape \"trianglemesh\" \"integer indices\" [0 1 2] \"point3 P\" [-9 -9 -9  9 -9 -9  0 -9 9]\n\
+        WorldEnd\n";
+    std::fs::write(&path, text).unwrap();
+    let description = scene::load(&path).unwrap();
+    let meshes = (description.shapes.iter())
+        .filter(|s| matches!(s, Shape::Triangles(_)))
+        .count();
+    assert_eq!(meshes, 2);
+    let world = dpm::world::World::new(description).unwrap();
+    assert_eq!(world.meshes_read_in_place(), meshes);
+
+    // (0.2, −0.3) lies in the first triangle at barycentrics (u, v) = (0.25, 0.35).
+    let origin = Vec3::new(0.2, -0.3, 5.0);
+    let hit = world
+        .intersect(origin, -Vec3::Z, 0.0, f32::INFINITY)
+        .unwrap();
+    assert!((hit.t - 5.0).abs() < 1e-5, "{}", hit.t);
+    assert!(hit.geometric_normal.abs_diff_eq(Vec3::Z, 1e-6));
+    let shading =
+        (0.4 * Vec3::Z + 0.25 * Vec3::new(0.6, 0.0, 0.8) + 0.35 * Vec3::new(0.0, 0.6, 0.8))
+            .normalize();
+    assert!(
+        hit.shading_normal.abs_diff_eq(shading, 1e-5),
+        "{} against {shading}",
+        hit.shading_normal
+    );
+    let uv = world.uv_at(&hit);
+    assert!(uv.abs_diff_eq(glam::Vec2::new(0.6, 0.35), 1e-5), "{uv}");
 }

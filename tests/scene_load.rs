@@ -28,7 +28,7 @@ fn meshes(scene: &SceneDescription) -> Vec<&TriangleMesh> {
         .shapes
         .iter()
         .filter_map(|s| match s {
-            Shape::Triangles(mesh) => Some(mesh),
+            Shape::Triangles(mesh) => Some(&**mesh),
             Shape::Sphere { .. } | Shape::Curves(_) => None,
         })
         .collect()

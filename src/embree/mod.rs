@@ -1,6 +1,6 @@
 //! The only door to Embree, and the only code in dpm that touches raw pointers: a thin safe
 //! wrapper that owns the device, error reporting, building an immutable scene from triangle
-//! meshes, spheres, cubic Bézier curves (`curves.rs`) and instances of other committed scenes
+//! meshes (copied, or read where their owner holds them: `triangles.rs`), spheres, cubic Bézier curves (`curves.rs`) and instances of other committed scenes
 //! (one level, as pbrt's object instancing allows), hit filters that let a geometry turn down
 //! hits (alpha cut-outs), single-ray closest-hit and occlusion queries, the Embree version in use,
 //! and the rayon pools (flush-to-zero, a bounded thread count) that trace rays. It runs on one of
@@ -14,6 +14,7 @@
 mod curves;
 mod filters;
 mod threads;
+mod triangles;
 mod version;
 
 pub use curves::{CurveKind, FLAT_CURVE_QUADS};
@@ -22,6 +23,7 @@ pub use filters::{Candidate, HitFilter};
 pub use threads::{
     MAX_THREADS, ThreadPoolError, enable_flush_to_zero, flush_to_zero_enabled, thread_pool,
 };
+pub use triangles::{SharedTriangles, pad_for_embree, padded_for_embree};
 pub use version::{BACKEND, Version, header_version, version, version_string};
 
 #[cfg(not(feature = "embree4"))]
@@ -249,6 +251,8 @@ impl Device {
             geometries: 0,
             instanced: Vec::new(),
             filters: Vec::new(),
+            shared: Vec::new(),
+            meshes_read_in_place: 0,
         })
     }
 }
@@ -269,6 +273,9 @@ pub struct SceneBuilder {
     /// The hit filters its geometries call, kept alive (and in place) as long as it is.
     #[allow(clippy::vec_box)] // Embree holds their addresses: a Vec alone would move them.
     filters: Vec<Box<FilterSlot>>,
+    /// The meshes Embree reads where they lie, kept alive as long as it is.
+    shared: Vec<Arc<dyn SharedTriangles>>,
+    meshes_read_in_place: usize,
 }
 
 impl SceneBuilder {
@@ -300,75 +307,6 @@ impl SceneBuilder {
         let id = id?;
         debug_assert_eq!(id, self.geometries);
         self.geometries += 1;
-        Ok(id)
-    }
-
-    /// Adds a triangle mesh. Indices must be in range and positions finite.
-    pub fn add_triangles(
-        &mut self,
-        positions: &[Vec3],
-        triangles: &[[u32; 3]],
-    ) -> Result<GeometryId, EmbreeError> {
-        self.add_triangles_then(positions, triangles, |_| {})
-    }
-
-    /// [`Self::add_triangles`], with `finish` called on the geometry before it is committed.
-    fn add_triangles_then(
-        &mut self,
-        positions: &[Vec3],
-        triangles: &[[u32; 3]],
-        finish: impl FnOnce(sys::RTCGeometry),
-    ) -> Result<GeometryId, EmbreeError> {
-        if triangles.is_empty() {
-            return Err(wrapper_error("a triangle mesh needs at least one triangle"));
-        }
-        if positions.iter().any(|p| !p.is_finite()) {
-            return Err(wrapper_error("a mesh vertex is not finite"));
-        }
-        let n = positions.len();
-        if let Some(t) = triangles
-            .iter()
-            .find(|t| t.iter().any(|&i| i as usize >= n))
-        {
-            return Err(wrapper_error(format!(
-                "triangle {t:?} indexes past {n} vertices"
-            )));
-        }
-        let device = self.device.clone();
-        self.attach(backend::TRIANGLE, |g| {
-            let vertices = new_buffer::<[f32; 3]>(&device, g, backend::VERTEX, backend::FLOAT3, n)?;
-            for (dst, p) in vertices.iter_mut().zip(positions) {
-                *dst = p.to_array();
-            }
-            let indices = new_buffer::<[u32; 3]>(
-                &device,
-                g,
-                backend::INDEX,
-                backend::UINT3,
-                triangles.len(),
-            )?;
-            indices.copy_from_slice(triangles);
-            finish(g);
-            Ok(())
-        })
-    }
-
-    /// [`Self::add_triangles`] with a filter that may turn down any hit on them, for closest
-    /// hits and occlusion alike (an alpha cut-out). Embree may ask about the same hit more than
-    /// once, so `filter` answers the same candidate the same way.
-    pub fn add_filtered_triangles(
-        &mut self,
-        positions: &[Vec3],
-        triangles: &[[u32; 3]],
-        filter: Arc<dyn HitFilter>,
-    ) -> Result<GeometryId, EmbreeError> {
-        let (slot, user) = FilterSlot::boxed(filter);
-        let id = self.add_triangles_then(positions, triangles, |g| {
-            // SAFETY: live, uncommitted geometry; `user` points at the boxed `#[repr(C)]` slot,
-            // a `dpm_hit_filter`, which the scene keeps in place for as long as it lives.
-            unsafe { shim::dpm_rtc_set_hit_filter(g, user) };
-        })?;
-        self.filters.push(slot);
         Ok(id)
     }
 
@@ -460,6 +398,8 @@ impl SceneBuilder {
             geometries: self.geometries,
             instanced: std::mem::take(&mut self.instanced),
             filters: std::mem::take(&mut self.filters),
+            shared: std::mem::take(&mut self.shared),
+            meshes_read_in_place: self.meshes_read_in_place,
         };
         scene.device.check()?;
         Ok(scene)
@@ -505,6 +445,10 @@ pub struct Scene {
     /// The hit filters its geometries call: only held, and dropped after the scene is released.
     #[allow(dead_code, clippy::vec_box)] // as in SceneBuilder
     filters: Vec<Box<FilterSlot>>,
+    /// The meshes Embree reads where they lie: only held, and dropped after the scene is.
+    #[allow(dead_code)]
+    shared: Vec<Arc<dyn SharedTriangles>>,
+    meshes_read_in_place: usize,
 }
 
 // SAFETY: a committed Embree scene may be traced from any number of threads; nothing mutates it.
@@ -557,6 +501,11 @@ fn raw_ray(origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> sys::RTCRay {
 }
 
 impl Scene {
+    /// How many of its triangle meshes Embree reads where they lie (not copied).
+    pub fn meshes_read_in_place(&self) -> usize {
+        self.meshes_read_in_place
+    }
+
     pub fn geometry_count(&self) -> u32 {
         self.geometries
     }

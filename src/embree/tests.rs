@@ -137,8 +137,9 @@ fn a_hit_filter_turns_hits_down_for_closest_hits_and_occlusion_and_through_insta
         asked: Mutex::new(Vec::new()),
     });
     let build = |builder: &mut SceneBuilder| {
+        let mesh = Arc::new(OwnedMesh::padded(p.to_vec(), vec![[0, 1, 2], [3, 4, 5]]));
         builder
-            .add_filtered_triangles(&p, &[[0, 1, 2], [3, 4, 5]], holes.clone())
+            .add_shared_triangles(mesh, Some(holes.clone()))
             .unwrap();
         builder
             .add_spheres(&[(Vec3::new(0.0, 0.0, 10.0), 1.0)])
@@ -189,6 +190,123 @@ fn a_hit_filter_turns_hits_down_for_closest_hits_and_occlusion_and_through_insta
 
 /// Four collinear control points from (−2, 0, 0) to (2, 0, 0): a straight segment along x, each
 /// point with `radius`.
+/// A mesh that owns its buffers, as a loaded scene's mesh does.
+struct OwnedMesh {
+    positions: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl OwnedMesh {
+    fn padded(mut positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
+        pad_for_embree(&mut positions);
+        Self {
+            positions,
+            triangles,
+        }
+    }
+}
+
+impl SharedTriangles for OwnedMesh {
+    fn positions(&self) -> &Vec<Vec3> {
+        &self.positions
+    }
+    fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+}
+
+/// A bumpy grid of `n` × `n` quads over [0, 1]², two triangles each.
+fn bumpy_grid(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let positions = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+            Vec3::new(x, y, 0.05 * (7.0 * x).sin() * (5.0 * y).cos())
+        })
+        .collect();
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let triangles = (0..n)
+        .flat_map(|j| (0..n).map(move |i| (i, j)))
+        .flat_map(|(i, j)| {
+            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+            [[a, b, c], [a, c, d]]
+        })
+        .collect();
+    (positions, triangles)
+}
+
+#[test]
+fn a_mesh_read_in_place_hits_as_its_copy_does_and_lives_as_long_as_the_scene() {
+    let device = Device::new().unwrap();
+    let (positions, triangles) = bumpy_grid(40);
+    let mut copied = device.scene_builder().unwrap();
+    copied.add_triangles(&positions, &triangles).unwrap();
+    let copied = copied.commit().unwrap();
+    assert_eq!(copied.meshes_read_in_place(), 0);
+
+    let mesh = Arc::new(OwnedMesh::padded(positions.clone(), triangles.clone()));
+    assert!(padded_for_embree(&mesh.positions));
+    let mut shared = device.scene_builder().unwrap();
+    shared.add_shared_triangles(mesh.clone(), None).unwrap();
+    let shared = shared.commit().unwrap();
+    assert_eq!(shared.meshes_read_in_place(), 1);
+    assert_eq!(Arc::strong_count(&mesh), 2, "the scene holds the mesh");
+
+    // Without room past the last vertex, the positions are copied and the hits still agree.
+    let mut tight = positions.clone();
+    tight.shrink_to_fit();
+    let tight = Arc::new(OwnedMesh {
+        positions: tight,
+        triangles: triangles.clone(),
+    });
+    let in_place = padded_for_embree(&tight.positions);
+    let mut fallback = device.scene_builder().unwrap();
+    fallback.add_shared_triangles(tight, None).unwrap();
+    let fallback = fallback.commit().unwrap();
+    assert_eq!(fallback.meshes_read_in_place(), usize::from(in_place));
+
+    let mut hits = 0;
+    for k in 0..2000u32 {
+        let (x, y) = ((k % 50) as f32 / 49.0, (k / 50) as f32 / 39.0);
+        let origin = Vec3::new(x * 1.2 - 0.1, y * 1.2 - 0.1, 1.0);
+        let dir = Vec3::new(0.1, -0.05, -1.0).normalize();
+        let want = copied.intersect(origin, dir, 0.0, f32::INFINITY);
+        for scene in [&shared, &fallback] {
+            let got = scene.intersect(origin, dir, 0.0, f32::INFINITY);
+            assert_eq!(
+                want.map(|h| (h.primitive, h.t)),
+                got.map(|h| (h.primitive, h.t))
+            );
+        }
+        hits += usize::from(want.is_some());
+    }
+    assert!(hits > 1000, "{hits} rays hit the grid");
+    drop(shared);
+    assert_eq!(
+        Arc::strong_count(&mesh),
+        1,
+        "dropping the scene lets the mesh go"
+    );
+}
+
+#[test]
+fn a_shared_mesh_is_checked_like_a_copied_one() {
+    let device = Device::new().unwrap();
+    let (mut positions, triangles) = bumpy_grid(4);
+    let mut past = triangles.clone();
+    past[7][2] = positions.len() as u32;
+    let mut builder = device.scene_builder().unwrap();
+    let mesh = Arc::new(OwnedMesh::padded(positions.clone(), past));
+    let err = builder.add_shared_triangles(mesh, None).unwrap_err();
+    assert!(err.message.contains("indexes past 25 vertices"), "{err}");
+    positions[3].y = f32::NAN;
+    let mesh = Arc::new(OwnedMesh::padded(positions, triangles));
+    let err = builder.add_shared_triangles(mesh, None).unwrap_err();
+    assert!(err.message.contains("not finite"), "{err}");
+    let empty = Arc::new(OwnedMesh::padded(Vec::new(), Vec::new()));
+    assert!(builder.add_shared_triangles(empty, None).is_err());
+}
+
 fn straight_segment(radius: f32) -> [[f32; 4]; 4] {
     [-2.0, -2.0 / 3.0, 2.0 / 3.0, 2.0].map(|x| [x, 0.0, 0.0, radius])
 }

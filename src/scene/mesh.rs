@@ -1,11 +1,13 @@
-//! OBJ meshes and their MTL materials, read through tobj and placed in the world. Owns reading
-//! the files, mapping MTL statements to scene materials (`Kd` → diffuse, `illum` 3/5 → mirror
-//! tinted by `Ks`, `illum` 4/6/7 or `Ni` with `d` < 1 / `Tr` > 0 → glass), splitting faces by
-//! material, gathering a mesh light's faces into one mesh, and dropping zero-area triangles. Errors inside an OBJ or MTL file name that file and its line;
+//! OBJ meshes and their MTL materials, read in parallel (`obj_fast`) or through tobj and placed
+//! in the world. Owns reading the files, mapping MTL statements to scene materials (`Kd` →
+//! diffuse, `illum` 3/5 → mirror tinted by `Ks`, `illum` 4/6/7 or `Ni` with `d` < 1 / `Tr` > 0
+//! → glass), splitting faces by material, gathering a mesh light's faces into one mesh, and
+//! dropping zero-area triangles. Errors inside an OBJ or MTL file name that file and its line;
 //! errors about the file as a whole name the scene's `file` field. Must not call Embree.
 
 use super::document::{Document, child_path};
 use super::files::SceneFiles;
+use super::obj_fast;
 use super::rules::{has_zero_area, is_ior, is_unit_channel};
 use super::validate::{MaterialTable, MeshPlacement};
 use super::{Material, SceneError, TriangleMesh};
@@ -140,7 +142,6 @@ impl ObjFile {
     ) -> Result<ObjFile, SceneError> {
         let text = read_text(path, files)
             .map_err(|why| doc.error(file_field, format!("`{}` {why}", path.display())))?;
-        check_obj_numbers(&text).map_err(|(line, why)| located(path, line, file_field, why))?;
 
         let folder = path.parent().unwrap_or(Path::new("")).to_path_buf();
         let libraries = RefCell::new(Vec::<MtlLibrary>::new());
@@ -152,56 +153,62 @@ impl ObjFile {
             ignore_points: true,
             ignore_lines: true,
         };
-        let loaded = tobj::load_obj_buf(
-            &mut CountingReader::new(text.as_bytes(), &consumed),
-            &options,
-            |named| {
-                // `mtllib a.mtl b.mtl` names two libraries (tobj hands over the whole rest of
-                // the line); a single name with spaces is taken whole when that file exists.
-                let whole = named.to_string_lossy().trim().to_string();
-                let names: Vec<String> = if files.read(&folder.join(&whole)).is_ok() {
-                    vec![whole]
-                } else {
-                    whole.split_whitespace().map(String::from).collect()
-                };
-                let mut all: Vec<tobj::Material> = Vec::new();
-                // tobj's own map type, taken from the first library read.
-                let mut by_name = None;
-                for name in names {
-                    match read_library(&folder.join(&name), files) {
-                        Ok((library, result)) => {
-                            let Ok((materials, map)) = result else {
-                                continue;
-                            };
-                            let names = by_name.get_or_insert_with(|| {
-                                let mut empty = map.clone();
-                                empty.clear();
-                                empty
-                            });
-                            for m in materials {
-                                names.entry(m.name.clone()).or_insert(all.len());
-                                all.push(m);
-                            }
-                            libraries.borrow_mut().push(library);
+        let load_library = |named: &Path| {
+            // `mtllib a.mtl b.mtl` names two libraries (tobj hands over the whole rest of
+            // the line); a single name with spaces is taken whole when that file exists.
+            let whole = named.to_string_lossy().trim().to_string();
+            let names: Vec<String> = if files.read(&folder.join(&whole)).is_ok() {
+                vec![whole]
+            } else {
+                whole.split_whitespace().map(String::from).collect()
+            };
+            let mut all: Vec<tobj::Material> = Vec::new();
+            // tobj's own map type, taken from the first library read.
+            let mut by_name = None;
+            for name in names {
+                match read_library(&folder.join(&name), files) {
+                    Ok((library, result)) => {
+                        let Ok((materials, map)) = result else {
+                            continue;
+                        };
+                        let names = by_name.get_or_insert_with(|| {
+                            let mut empty = map.clone();
+                            empty.clear();
+                            empty
+                        });
+                        for m in materials {
+                            names.entry(m.name.clone()).or_insert(all.len());
+                            all.push(m);
                         }
-                        Err(failure) => {
-                            let failure = failure.unwrap_or_else(|why| {
-                                // Unreadable: blame the `mtllib` statement being parsed.
-                                located(path, line_of_byte(&text, consumed.get()), "", why)
-                            });
-                            library_failures.borrow_mut().push(SceneError {
-                                field: file_field.to_string(),
-                                ..failure
-                            });
-                        }
+                        libraries.borrow_mut().push(library);
+                    }
+                    Err(failure) => {
+                        let failure = failure.unwrap_or_else(|why| {
+                            // Unreadable: blame the `mtllib` statement being parsed.
+                            located(path, line_of_byte(&text, consumed.get()), "", why)
+                        });
+                        library_failures.borrow_mut().push(SceneError {
+                            field: file_field.to_string(),
+                            ..failure
+                        });
                     }
                 }
-                match by_name {
-                    Some(names) => Ok((all, names)),
-                    None => Err(tobj::LoadError::OpenFileFailed),
-                }
-            },
-        );
+            }
+            match by_name {
+                Some(names) => Ok((all, names)),
+                None => Err(tobj::LoadError::OpenFileFailed),
+            }
+        };
+        // The parallel reader where it can; tobj, after the checks it lacks, where not.
+        let loaded = match obj_fast::load(&text, &consumed, load_library) {
+            Some(loaded) => loaded,
+            None => {
+                check_obj_numbers(&text)
+                    .map_err(|(line, why)| located(path, line, file_field, why))?;
+                let mut reader = CountingReader::new(text.as_bytes(), &consumed);
+                tobj::load_obj_buf(&mut reader, &options, load_library)
+            }
+        };
         let (models, materials) = loaded.map_err(|e| {
             let line = line_of_byte(&text, consumed.get());
             located(path, line, file_field, format!("OBJ error: {e}"))

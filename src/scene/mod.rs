@@ -22,6 +22,7 @@ mod format;
 mod medium;
 mod mesh;
 pub mod metals;
+mod obj_fast;
 mod pbrt;
 pub mod ply;
 mod rules;
@@ -44,6 +45,7 @@ pub use transport::{PBRT_DEFAULT_MAX_DEPTH, Transport};
 
 use glam::{Mat3, Vec2, Vec3};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneDescription {
@@ -431,7 +433,9 @@ pub enum Shape {
         /// keep the world's axes (the identity).
         to_object: Mat3,
     },
-    Triangles(TriangleMesh),
+    /// Shared, not copied, with the tracer: Embree reads the positions and triangles where
+    /// they lie, and shading reads the normals and (u, v) from the same mesh.
+    Triangles(Arc<TriangleMesh>),
     Curves(Curves),
 }
 
@@ -489,7 +493,19 @@ pub struct TriangleMesh {
     pub cutout: Option<Cutout>,
 }
 
+/// The corners' (u, v) of a triangle of a mesh without texture coordinates: pbrt's.
+pub const DEFAULT_CORNER_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::ONE];
+
 impl TriangleMesh {
+    /// Triangle `t`'s corners' (u, v).
+    #[inline]
+    pub fn corner_uvs(&self, t: usize) -> [Vec2; 3] {
+        match &self.uvs {
+            Some(uvs) => self.triangles[t].map(|i| uvs[i as usize]),
+            None => DEFAULT_CORNER_UVS,
+        }
+    }
+
     /// The corners of a box around the mesh.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         (self.positions.iter()).fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p)))
@@ -716,7 +732,11 @@ pub fn parse_with(
                 )?;
                 report.degenerate_triangles_dropped += loaded.degenerate_triangles_dropped;
                 report.warnings.extend(loaded.warnings);
-                loaded.meshes.into_iter().map(Shape::Triangles).collect()
+                loaded
+                    .meshes
+                    .into_iter()
+                    .map(|m| Shape::Triangles(Arc::new(m)))
+                    .collect()
             }
         };
         let (inside, outside) = &names.objects[i];

@@ -20,6 +20,7 @@ use super::{
 use glam::{Vec2, Vec3};
 use rayon::slice::ParallelSliceMut;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// The names of [`SpotFalloff`]s in the scene file.
 const FALLOFFS: [(&str, SpotFalloff); 2] = [
@@ -394,7 +395,7 @@ pub(crate) fn quad(
     let [corner, edge_u, edge_v] = [spec.corner, spec.edge_u, spec.edge_v].map(Vec3::from_array);
     rules::parallelogram(corner, edge_u, edge_v).map_err(at(doc, path))?;
     let material = materials.resolve(doc, &child_path(path, "material"), &spec.material)?;
-    Ok(Shape::Triangles(TriangleMesh {
+    Ok(Shape::Triangles(Arc::new(TriangleMesh {
         positions: vec![
             corner,
             corner + edge_u,
@@ -407,7 +408,7 @@ pub(crate) fn quad(
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         material,
         cutout: None,
-    }))
+    })))
 }
 
 /// Where a mesh object or light takes its triangles from and how it places them.

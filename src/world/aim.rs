@@ -418,14 +418,14 @@ mod tests {
             })
             .collect();
         let triangles: Vec<[u32; 3]> = (0..598).map(|i| [i, i + 1, i + 2]).collect();
-        let mesh = Shape::Triangles(TriangleMesh {
+        let mesh = Shape::Triangles(std::sync::Arc::new(TriangleMesh {
             positions: positions.clone(),
             normals: None,
             uvs: None,
             triangles: triangles.clone(),
             material: 0,
             cutout: None,
-        });
+        }));
         let ball = Shape::Sphere {
             center: Vec3::new(5.0, 0.0, 0.0),
             radius: 0.5,

@@ -3,21 +3,21 @@
 //! there. Owns reading a hit's texture coordinates for its mask and the hash that turns a
 //! fractional alpha into the same answer for the same ray; must not shade or trace rays.
 
-use super::texturing::corner_uvs;
 use crate::embree::{Candidate, HitFilter};
 use crate::scene::{Cutout, TriangleMesh};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
+use std::sync::Arc;
 
-/// A cut mesh's answer to Embree: its triangles' corner (u, v) and its masks.
+/// A cut mesh's answer to Embree: the mesh, for its corners' (u, v), and its masks.
 pub(super) struct CutoutFilter {
-    corners: Vec<[Vec2; 3]>,
+    mesh: Arc<TriangleMesh>,
     cutout: Cutout,
 }
 
 impl CutoutFilter {
-    pub(super) fn new(mesh: &TriangleMesh, cutout: &Cutout) -> Self {
+    pub(super) fn new(mesh: Arc<TriangleMesh>, cutout: &Cutout) -> Self {
         Self {
-            corners: corner_uvs(mesh),
+            mesh,
             cutout: cutout.clone(),
         }
     }
@@ -25,10 +25,11 @@ impl CutoutFilter {
 
 impl HitFilter for CutoutFilter {
     fn accept(&self, c: &Candidate) -> bool {
-        let Some([t0, t1, t2]) = self.corners.get(c.primitive as usize) else {
+        if c.primitive as usize >= self.mesh.triangles.len() {
             return true;
-        };
-        let uv = (1.0 - c.u - c.v) * *t0 + c.u * *t1 + c.v * *t2;
+        }
+        let [t0, t1, t2] = self.mesh.corner_uvs(c.primitive as usize);
+        let uv = (1.0 - c.u - c.v) * t0 + c.u * t1 + c.v * t2;
         let coverage = self.cutout.coverage(uv, c.is_occlusion());
         if coverage >= 1.0 {
             true
@@ -63,6 +64,7 @@ fn mix(mut z: u64) -> u64 {
 mod tests {
     use super::*;
     use crate::scene::Texture;
+    use glam::Vec2;
 
     fn quad(cutout: &Cutout) -> CutoutFilter {
         let mesh = TriangleMesh {
@@ -71,7 +73,7 @@ mod tests {
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             ..Default::default()
         };
-        CutoutFilter::new(&mesh, cutout)
+        CutoutFilter::new(Arc::new(mesh), cutout)
     }
 
     #[test]

@@ -12,6 +12,7 @@
 use crate::embree;
 use crate::scene::TriangleMesh;
 use glam::Vec3;
+use std::sync::Arc;
 
 /// How a hit on one Embree geometry finds its normals: everything resolving a hit reads, in
 /// one place per geometry id (not a kind, then the scene's shape or light, then its normals).
@@ -39,32 +40,43 @@ pub(super) enum HitNormals {
     FlatCurve,
 }
 
-/// What resolving a hit on a mesh reads, laid out by triangle so that a hit reads one place
-/// (not three indices and then three vertices and three normals scattered over the mesh).
-pub(super) enum TriangleNormals {
-    /// Unit geometric normal of each triangle.
-    Flat(Vec<Vec3>),
-    /// Unit geometric normal and the three vertex normals of each triangle.
-    Smooth(Vec<[Vec3; 4]>),
+/// A mesh's normals at a hit, read from the mesh itself, which Embree reads too (no table
+/// per triangle: a mesh is held once). The geometric normal is worked out from the corners,
+/// the same way every time, so a triangle's normal does not depend on who asks.
+pub(super) struct TriangleNormals {
+    mesh: Arc<TriangleMesh>,
+    /// Interpolate the mesh's vertex normals (an emitter shades flat even when it has them).
+    smooth: bool,
 }
 
 impl TriangleNormals {
-    pub(super) fn new(mesh: &TriangleMesh) -> Self {
-        let geometric = |t: &[u32; 3]| {
-            let [p0, p1, p2] = t.map(|i| mesh.positions[i as usize]);
-            (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z)
-        };
-        match &mesh.normals {
-            None => Self::Flat(mesh.triangles.iter().map(geometric).collect()),
-            Some(n) => Self::Smooth(
-                mesh.triangles
-                    .iter()
-                    .map(|t| {
-                        let [n0, n1, n2] = t.map(|i| n[i as usize]);
-                        [geometric(t), n0, n1, n2]
-                    })
-                    .collect(),
-            ),
+    /// Smooth where the mesh has vertex normals, flat elsewhere.
+    pub(super) fn new(mesh: Arc<TriangleMesh>) -> Self {
+        let smooth = mesh.normals.is_some();
+        Self { mesh, smooth }
+    }
+
+    /// Flat whatever the mesh holds.
+    pub(super) fn flat(mesh: Arc<TriangleMesh>) -> Self {
+        Self {
+            mesh,
+            smooth: false,
+        }
+    }
+
+    /// The unit geometric and shading normals of triangle `primitive` at barycentrics (u, v).
+    #[inline]
+    fn at(&self, primitive: u32, u: f32, v: f32) -> (Vec3, Vec3) {
+        let corners = self.mesh.triangles[primitive as usize];
+        let [p0, p1, p2] = corners.map(|i| self.mesh.positions[i as usize]);
+        let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
+        match &self.mesh.normals {
+            Some(n) if self.smooth => {
+                let [n0, n1, n2] = corners.map(|i| n[i as usize]);
+                let s = ((1.0 - u - v) * n0 + u * n1 + v * n2).normalize_or(ng);
+                (ng, if s.dot(ng) < 0.0 { -s } else { s })
+            }
+            _ => (ng, ng),
         }
     }
 }
@@ -102,16 +114,7 @@ pub(super) fn normals_at(
             (n, n)
         }
         HitNormals::Fixed(n) => (*n, *n),
-        HitNormals::Triangles(TriangleNormals::Flat(normals)) => {
-            let n = normals[hit.primitive as usize];
-            (n, n)
-        }
-        HitNormals::Triangles(TriangleNormals::Smooth(normals)) => {
-            let [ng, n0, n1, n2] = normals[hit.primitive as usize];
-            let s = (1.0 - hit.u - hit.v) * n0 + hit.u * n1 + hit.v * n2;
-            let s = s.normalize_or(ng);
-            (ng, if s.dot(ng) < 0.0 { -s } else { s })
-        }
+        HitNormals::Triangles(mesh) => mesh.at(hit.primitive, hit.u, hit.v),
         HitNormals::Ribbon(ribbon) => {
             let tangent = hit.normal.normalize_or_zero();
             let n = ribbon.shading_normal(hit.primitive, hit.u, tangent, dir);

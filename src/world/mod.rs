@@ -70,6 +70,29 @@ impl Interaction {
     }
 }
 
+/// Embree reads a scene's meshes where they lie: the world and the tracer share one copy.
+impl embree::SharedTriangles for TriangleMesh {
+    fn positions(&self) -> &Vec<Vec3> {
+        &self.positions
+    }
+    fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+}
+
+/// Gives each mesh the room past its last vertex that lets Embree read it where it lies: free
+/// where the vector has spare capacity, one copy of the positions where not. A mesh someone
+/// else holds too is left as it is, and Embree copies it.
+fn pad_meshes(shapes: &mut [Shape]) {
+    for shape in shapes {
+        if let Shape::Triangles(mesh) = shape
+            && let Some(mesh) = Arc::get_mut(mesh)
+        {
+            embree::pad_for_embree(&mut mesh.positions);
+        }
+    }
+}
+
 /// Adds `shape` to `builder`: how its hits find their normals, its box and its material.
 fn add_shape(
     builder: &mut embree::SceneBuilder,
@@ -91,18 +114,13 @@ fn add_shape(
             )
         }
         Shape::Triangles(mesh) => {
-            match &mesh.cutout {
-                None => builder.add_triangles(&mesh.positions, &mesh.triangles)?,
-                Some(cutout) => builder.add_filtered_triangles(
-                    &mesh.positions,
-                    &mesh.triangles,
-                    Arc::new(cutout::CutoutFilter::new(mesh, cutout)),
-                )?,
-            };
-            let a = mesh.positions.iter().fold(Vec3::MAX, |m, p| m.min(*p));
-            let b = mesh.positions.iter().fold(Vec3::MIN, |m, p| m.max(*p));
-            let hit_normals = HitNormals::Triangles(TriangleNormals::new(mesh));
-            (hit_normals, (a, b), mesh.material)
+            let cutout = (mesh.cutout.as_ref()).map(|cutout| {
+                Arc::new(cutout::CutoutFilter::new(mesh.clone(), cutout))
+                    as Arc<dyn embree::HitFilter>
+            });
+            builder.add_shared_triangles(mesh.clone(), cutout)?;
+            let hit_normals = HitNormals::Triangles(TriangleNormals::new(mesh.clone()));
+            (hit_normals, mesh.bounds(), mesh.material)
         }
         Shape::Curves(curves) => {
             let (kind, normals) = match curves.kind {
@@ -264,9 +282,16 @@ impl World {
     /// The world of `description`, microfacet reflection at least `glossy_min_alpha` rough
     /// read from photons and smoother lobes followed.
     pub fn with_glossy_min_alpha(
-        description: SceneDescription,
+        mut description: SceneDescription,
         glossy_min_alpha: f32,
     ) -> Result<Self, EmbreeError> {
+        let prototypes = description.prototypes.iter_mut();
+        for shapes in prototypes
+            .map(|p| &mut p.shapes)
+            .chain([&mut description.shapes])
+        {
+            pad_meshes(shapes);
+        }
         let device = embree::Device::new()?;
         let mut builder = device.scene_builder()?;
         let mut surfaces = Vec::new();
@@ -332,11 +357,8 @@ impl World {
                 Light::Mesh { mesh, .. } => {
                     builder.add_triangles(&mesh.positions, &mesh.triangles)?;
                     // An emitter is flat: its side is its triangles' geometric normal.
-                    let flat = TriangleMesh {
-                        normals: None,
-                        ..mesh.clone()
-                    };
-                    normals.push(HitNormals::Triangles(TriangleNormals::new(&flat)));
+                    let flat = TriangleNormals::flat(Arc::new(mesh.clone()));
+                    normals.push(HitNormals::Triangles(flat));
                     for p in &mesh.positions {
                         light_lo = light_lo.min(*p);
                         light_hi = light_hi.max(*p);
@@ -659,6 +681,12 @@ impl World {
         (self.surfaces.iter().copied())
             .chain(self.instancing.placed_surfaces())
             .any(|s| matches!(s, Surface::Material(m) if self.reads_photons(m)))
+    }
+
+    /// How many of the scene's meshes Embree reads where the world holds them (the rest,
+    /// emitters and meshes held elsewhere too, it copies).
+    pub fn meshes_read_in_place(&self) -> usize {
+        self.accel.meshes_read_in_place()
     }
 
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tnear: f32, tfar: f32) -> bool {

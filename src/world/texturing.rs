@@ -12,15 +12,12 @@ use crate::scene::{
 use glam::{Mat3, Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
-/// A triangle's corners' (u, v) when its mesh has none (pbrt's default).
-const DEFAULT_CORNER_UVS: [Vec2; 3] = [Vec2::ZERO, Vec2::X, Vec2::ONE];
-
 /// How one geometry's hits find their (u, v).
 enum GeometryUv {
     /// Not textured: never asked.
     Untextured,
-    /// Each triangle's corners' (u, v).
-    Triangles(Vec<[Vec2; 3]>),
+    /// A mesh: its triangles' corners' (u, v), read from the mesh (pbrt's default without).
+    Triangles(std::sync::Arc<TriangleMesh>),
     /// A sphere's parametric (u, v) about its centre, measured along its own axes.
     Sphere { center: Vec3, to_object: Mat3 },
     /// A flat curve or a ribbon: u is Embree's parameter along the segment (pbrt's u, 0 to 1
@@ -75,7 +72,7 @@ impl Texturing {
                         to_object: *to_object,
                     },
                     Shape::Triangles(mesh) if needs_uv[mesh.material as usize] => {
-                        GeometryUv::Triangles(corner_uvs(mesh))
+                        GeometryUv::Triangles(mesh.clone())
                     }
                     Shape::Curves(curves) if needs_uv[curves.material as usize] => {
                         match curves.kind {
@@ -211,8 +208,8 @@ pub fn mix_choice(materials: [u32; 2], amount: f32, position: Vec3) -> u32 {
 #[inline]
 fn geometry_uv(uv: Option<&GeometryUv>, primitive: u32, barycentric: Vec2, position: Vec3) -> Vec2 {
     match uv {
-        Some(GeometryUv::Triangles(corners)) => {
-            let [t0, t1, t2] = corners[primitive as usize];
+        Some(GeometryUv::Triangles(mesh)) => {
+            let [t0, t1, t2] = mesh.corner_uvs(primitive as usize);
             (1.0 - barycentric.x - barycentric.y) * t0 + barycentric.x * t1 + barycentric.y * t2
         }
         Some(GeometryUv::Sphere { center, to_object }) => {
@@ -240,15 +237,6 @@ pub fn sphere_uv(local: Vec3) -> Vec2 {
     }
     let cos_theta = (local.z / local.length().max(f32::MIN_POSITIVE)).clamp(-1.0, 1.0);
     Vec2::new(phi / TAU, 1.0 - cos_theta.acos() / PI)
-}
-
-pub(super) fn corner_uvs(mesh: &TriangleMesh) -> Vec<[Vec2; 3]> {
-    match &mesh.uvs {
-        Some(uvs) => (mesh.triangles.iter())
-            .map(|t| t.map(|i| uvs[i as usize]))
-            .collect(),
-        None => vec![DEFAULT_CORNER_UVS; mesh.triangles.len()],
-    }
 }
 
 #[cfg(test)]

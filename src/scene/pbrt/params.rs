@@ -5,7 +5,7 @@
 
 use super::Dialect;
 use super::cursor::Cursor;
-use super::lexer::{Token, TokenKind};
+use super::lexer::{NumberList, Token, TokenKind};
 use crate::spectrum;
 use glam::Vec3;
 use std::cell::Cell;
@@ -16,6 +16,8 @@ use std::sync::Arc;
 #[derive(Clone, Debug, PartialEq)]
 pub(super) enum Value {
     Number(String),
+    /// A long list of numbers, as the lexer kept it ([`NumberList`]).
+    Numbers(Arc<NumberList>),
     Str(String),
     Bool(bool),
 }
@@ -83,35 +85,42 @@ impl Param {
     }
 
     fn numbers(&self) -> Result<Vec<f32>, ParamError> {
-        self.values
-            .iter()
-            .map(|v| match v {
-                Value::Number(text) => match text.parse::<f32>() {
-                    Ok(x) if x.is_finite() => Ok(x),
-                    Ok(_) => Err(self.error(format!("{text} is not a finite number"))),
-                    Err(_) => Err(self.error(format!("`{text}` is not a number"))),
-                },
-                other => Err(self.error(format!("expected numbers, found {}", describe(other)))),
-            })
-            .collect()
+        self.values_as("numbers", |text| match text.parse::<f32>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            Ok(_) => Err(format!("{text} is not a finite number")),
+            Err(_) => Err(format!("`{text}` is not a number")),
+        })
     }
 
     fn integers(&self) -> Result<Vec<i64>, ParamError> {
-        self.values
-            .iter()
-            .map(|v| match v {
-                Value::Number(text) => text
-                    .parse::<i64>()
-                    .map_err(|_| self.error(format!("`{text}` is not an integer"))),
-                other => Err(self.error(format!("expected integers, found {}", describe(other)))),
-            })
-            .collect()
+        self.values_as("integers", |text| {
+            (text.parse::<i64>()).map_err(|_| format!("`{text}` is not an integer"))
+        })
+    }
+
+    /// Every value read by `parse` (a long list in parallel), all of them `what`.
+    fn values_as<T: Send>(
+        &self,
+        what: &str,
+        parse: impl Fn(&str) -> Result<T, String> + Sync,
+    ) -> Result<Vec<T>, ParamError> {
+        match &self.values[..] {
+            [Value::Numbers(list)] => list.parse(&parse),
+            values => (values.iter())
+                .map(|v| match v {
+                    Value::Number(text) => parse(text),
+                    other => Err(format!("expected {what}, found {}", describe(other))),
+                })
+                .collect(),
+        }
+        .map_err(|message| self.error(message))
     }
 }
 
 fn describe(v: &Value) -> String {
     match v {
         Value::Number(n) => format!("the number {n}"),
+        Value::Numbers(list) => format!("a list of {} numbers", list.len()),
         Value::Str(s) => format!("the string \"{s}\""),
         Value::Bool(b) => format!("the word {b}"),
     }
@@ -494,8 +503,12 @@ impl ParamList {
             return Ok(None);
         };
         let p = self.typed(p, types)?;
-        if p.values.len() != 1 {
-            return Err(p.error(format!("has {} values; expected one", p.values.len())));
+        let count = match &p.values[..] {
+            [Value::Numbers(list)] => list.len(),
+            values => values.len(),
+        };
+        if count != 1 {
+            return Err(p.error(format!("has {count} values; expected one")));
         }
         read(p).map(Some)
     }
@@ -516,6 +529,7 @@ fn family(ty: &str) -> &str {
 fn value(kind: &TokenKind) -> Option<Value> {
     match kind {
         TokenKind::Number(n) => Some(Value::Number(n.clone())),
+        TokenKind::Numbers(list) => Some(Value::Numbers(list.clone())),
         TokenKind::Str(s) => Some(Value::Str(s.clone())),
         TokenKind::Word(w) if w == "true" => Some(Value::Bool(true)),
         TokenKind::Word(w) if w == "false" => Some(Value::Bool(false)),
@@ -527,6 +541,7 @@ pub(super) fn show(kind: &TokenKind) -> String {
     match kind {
         TokenKind::Str(s) => format!("string \"{s}\""),
         TokenKind::Number(n) => format!("number {n}"),
+        TokenKind::Numbers(list) => format!("list of {} numbers", list.len()),
         TokenKind::Word(w) => format!("`{w}`"),
         TokenKind::Open => "`[`".into(),
         TokenKind::Close => "`]`".into(),

@@ -114,6 +114,22 @@ impl Body<'_> {
         }
     }
 
+    /// The next `count` lines of an ASCII body, when there are that many and none is blank
+    /// (a line an element); `None` for a binary body.
+    pub(super) fn ascii_lines(&self, count: usize) -> Option<&[&str]> {
+        let Body::Ascii(a) = self else { return None };
+        let lines = a.lines.get(a.line..a.line.checked_add(count)?)?;
+        use rayon::prelude::*;
+        (!lines.par_iter().any(|l| l.trim().is_empty())).then_some(lines)
+    }
+
+    /// Moves an ASCII reader `count` lines on (what [`Body::ascii_lines`] handed out was read).
+    pub(super) fn skip_lines(&mut self, count: usize) {
+        if let Body::Ascii(a) = self {
+            a.line += count;
+        }
+    }
+
     /// Moves a binary reader `n` bytes on (what [`Body::binary_rest`] handed out was read).
     pub(super) fn advance(&mut self, n: usize) {
         if let Body::Binary { at, .. } = self {

@@ -1,8 +1,10 @@
-//! Binary bodies whose records all have one size, read in parallel: vertices whose properties
-//! are all scalars, and faces that are all triangles of one list and nothing else. Each record
-//! is decoded where it lies, its checks (finite values, indices in range, three corners) in the
-//! same pass. Anything else, and any record a check refuses, is left to the sequential reader
-//! ([`super::body`]), which names the first bad element: this path never reports an error.
+//! Bodies read in parallel. Binary: records all of one size, vertices whose properties are all
+//! scalars and faces that are all triangles of one list and nothing else, each record decoded
+//! where it lies. ASCII: a line an element, vertices of scalars only and faces of one list of
+//! three or four corners. Each element's checks (finite values, indices in range, corner
+//! counts) run in the same pass. Anything else, and any element a check refuses, is left to
+//! the sequential reader ([`super::body`]), which names the first bad element: this path never
+//! reports an error.
 
 use super::{Element, MAX_VERTICES, PlyMesh, Property, Scalar, vertex_layout};
 use glam::{Vec2, Vec3};
@@ -109,4 +111,91 @@ pub(super) fn triangles(
     }
     mesh.triangles = triangles;
     Some(used)
+}
+
+/// One ASCII word as the sequential reader reads a `ty` value.
+fn ascii_value(word: &str, ty: Scalar) -> Option<f64> {
+    match ty.is_integer() {
+        true => word.parse::<i64>().ok().map(|v| v as f64),
+        false => word.parse::<f64>().ok(),
+    }
+}
+
+/// Reads `element` (the vertices, a line each) from `lines` into `mesh`, or `None` (nothing
+/// written) where the sequential reader must.
+pub(super) fn ascii_vertices(lines: &[&str], element: &Element, mesh: &mut PlyMesh) -> Option<()> {
+    if element.count > MAX_VERTICES || lines.len() != element.count {
+        return None;
+    }
+    let layout = vertex_layout(element).ok()?;
+    let types: Vec<Scalar> = (element.properties.iter())
+        .map(|p| match p {
+            Property::Scalar { ty, .. } => Some(*ty),
+            Property::List { .. } => None,
+        })
+        .collect::<Option<_>>()?;
+    // Each line's values, all of them, as the sequential reader would hold them.
+    let record = |line: &str| -> Option<Vec<f32>> {
+        let mut values = Vec::with_capacity(types.len());
+        let mut words = line.split_whitespace();
+        for ty in &types {
+            values.push(ascii_value(words.next()?, *ty)? as f32);
+        }
+        (words.next().is_none() && values.iter().all(|v| v.is_finite())).then_some(values)
+    };
+    let pick3 = |v: &[f32], [a, b, c]: [usize; 3]| Vec3::new(v[a], v[b], v[c]);
+    let rows: Vec<(Vec3, Vec3, Vec2)> = (lines.par_iter())
+        .map(|line| {
+            let v = record(line)?;
+            let n = layout.normal.map_or(Vec3::ZERO, |slots| pick3(&v, slots));
+            let t = layout.uv.map_or(Vec2::ZERO, |[a, b]| Vec2::new(v[a], v[b]));
+            Some((pick3(&v, layout.position), n, t))
+        })
+        .collect::<Option<_>>()?;
+    mesh.positions = rows.par_iter().map(|r| r.0).collect();
+    mesh.normals = layout
+        .normal
+        .map(|_| rows.par_iter().map(|r| r.1).collect());
+    mesh.uvs = layout.uv.map(|_| rows.par_iter().map(|r| r.2).collect());
+    Some(())
+}
+
+/// Reads `element` (faces of three or four corners, a line each, one list and nothing else)
+/// from `lines` into `mesh`, or `None` (nothing written) where the sequential reader must.
+pub(super) fn ascii_triangles(
+    lines: &[&str],
+    element: &Element,
+    vertex_count: usize,
+    mesh: &mut PlyMesh,
+) -> Option<()> {
+    let [Property::List { name, count, item }] = &element.properties[..] else {
+        return None;
+    };
+    if (name != "vertex_indices" && name != "vertex_index") || lines.len() != element.count {
+        return None;
+    }
+    let corner = |word: &str| {
+        let v = ascii_value(word, *item)?;
+        (v >= 0.0 && v.fract() == 0.0 && (v as usize) < vertex_count).then_some(v as u32)
+    };
+    // A quad is two triangles, [a, b, c] and [a, c, d], as the sequential reader splits it.
+    let faces: Vec<([u32; 3], Option<[u32; 3]>)> = (lines.par_iter())
+        .map(|line| {
+            let mut words = line.split_whitespace();
+            let n = ascii_value(words.next()?, *count)?;
+            let corners: Vec<u32> = words.map(corner).collect::<Option<_>>()?;
+            match corners[..] {
+                [a, b, c] if n == 3.0 => Some(([a, b, c], None)),
+                [a, b, c, d] if n == 4.0 => Some(([a, b, c], Some([a, c, d]))),
+                _ => None,
+            }
+        })
+        .collect::<Option<_>>()?;
+    let quads = faces.iter().filter(|f| f.1.is_some()).count();
+    mesh.triangles = Vec::with_capacity(faces.len() + quads);
+    for (first, second) in faces {
+        mesh.triangles.push(first);
+        mesh.triangles.extend(second);
+    }
+    Some(())
 }

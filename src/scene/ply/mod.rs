@@ -172,8 +172,13 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
                 vertex_count = Some(element.count);
                 let fast = (reader.binary_rest())
                     .and_then(|(rest, big)| fast::vertices(rest, element, big, &mut mesh));
+                let ascii = fast.is_none()
+                    && (reader.ascii_lines(element.count))
+                        .and_then(|lines| fast::ascii_vertices(lines, element, &mut mesh))
+                        .is_some();
                 match fast {
                     Some(used) => reader.advance(used),
+                    None if ascii => reader.skip_lines(element.count),
                     None => read_vertices(&mut reader, element, &mut mesh)?,
                 }
             }
@@ -188,8 +193,15 @@ pub fn parse(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
                 let fast = (reader.binary_rest()).and_then(|(rest, big)| {
                     fast::triangles(rest, element, vertices, big, &mut mesh)
                 });
+                let ascii = fast.is_none()
+                    && (reader.ascii_lines(element.count))
+                        .and_then(|lines| {
+                            fast::ascii_triangles(lines, element, vertices, &mut mesh)
+                        })
+                        .is_some();
                 match fast {
                     Some(used) => reader.advance(used),
+                    None if ascii => reader.skip_lines(element.count),
                     None => read_faces(&mut reader, element, vertices, &mut mesh)?,
                 }
             }

@@ -157,14 +157,27 @@ fn random_ply(format: &str, faces: usize, quads: &[usize], bad: Option<(usize, u
     out
 }
 
+/// `text` with a blank line after line `at` of it: the record-by-record reader's business.
+fn with_blank_line(text: &[u8], at: usize) -> Vec<u8> {
+    let text = String::from_utf8(text.to_vec()).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.insert(at, "");
+    (lines.join("\n") + "\n").into_bytes()
+}
+
 #[test]
-fn binary_files_read_in_parallel_give_the_ascii_files_mesh() {
-    // ASCII is read record by record; binary all-triangle bodies in parallel, and a body with
-    // a quad falls back to the record-by-record reader. Every path gives the same mesh.
+fn every_reader_parallel_or_not_gives_the_same_mesh() {
+    // Both bodies are read in parallel where they can be: binary all-triangle bodies, ASCII
+    // bodies a line an element (quads too). A binary quad, or a blank line in an ASCII body,
+    // falls back to the record-by-record reader. Every path gives the same mesh.
     for quads in [&[][..], &[17, 1500][..]] {
-        let ascii = parse(&random_ply("ascii", 2000, quads, None)).unwrap();
+        let text = random_ply("ascii", 2000, quads, None);
+        let ascii = parse(&text).unwrap();
         assert_eq!(ascii.triangles.len(), 2000 + quads.len());
         assert_eq!(ascii.uvs.as_ref().map(Vec::len), Some(1000));
+        // Blank lines among the vertices and among the faces (the header has 14 lines).
+        let sequential = parse(&with_blank_line(&with_blank_line(&text, 500), 2100)).unwrap();
+        assert_eq!(sequential, ascii, "sequential ASCII, quads {quads:?}");
         for format in ["binary_little_endian", "binary_big_endian"] {
             let binary = parse(&random_ply(format, 2000, quads, None)).unwrap();
             assert_eq!(binary, ascii, "{format}, quads {quads:?}");
@@ -173,8 +186,8 @@ fn binary_files_read_in_parallel_give_the_ascii_files_mesh() {
 }
 
 #[test]
-fn a_bad_index_in_a_binary_body_is_named_by_its_face() {
-    for format in ["binary_little_endian", "binary_big_endian"] {
+fn a_bad_index_in_a_body_read_in_parallel_is_named_by_its_face() {
+    for format in ["ascii", "binary_little_endian", "binary_big_endian"] {
         let err = parse(&random_ply(format, 2000, &[], Some((1234, 1000)))).unwrap_err();
         assert_eq!(err.field, "face[1234]", "{format}: {err:?}");
         assert!(err.message.contains("vertex index 1000"), "{err:?}");

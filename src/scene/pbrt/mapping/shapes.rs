@@ -60,7 +60,7 @@ impl Mapper<'_> {
             }],
             Geometry::Triangles(mut mesh) => {
                 mesh.material = material;
-                vec![Shape::Triangles(mesh)]
+                vec![Shape::Triangles(mesh.into())]
             }
             Geometry::Curves(mut curves) => {
                 curves.material = material;
