@@ -4,8 +4,9 @@
 //! [`OPEN_PATHS_PER_PHOTON`] of them, and half the global photons' bounces then aim at the
 //! other objects (`World::aim_bounces_at_objects`). And there the global map is often a small
 //! part of the image: a probe map and a grid of camera rays measure its share of the
-//! irradiance the camera sees, and a pass stores photons in proportion to that share, the
-//! full count from [`FULL_SHARE`] on. Both probes draw from a fixed seed, so every shard of a
+//! irradiance the camera sees, and a pass stores photons in proportion to that share (the
+//! full count from [`FULL_SHARE`] on) and to one over the square root of the paths a stored
+//! photon costs past [`OPEN_PATHS_PER_PHOTON`]. Both probes draw from a fixed seed, so every shard of a
 //! render, whatever its seed, decides alike. Owns those decisions; must not shade pixels.
 
 use super::RayCamera;
@@ -68,9 +69,14 @@ pub(super) fn size_for_an_open_scene(
         ("aimed", u64::from(aimed)),
     ];
     if open && args.global_photons.is_none() && settings.final_gather == 0 {
-        let (map, _, _) = probe(world, SHARE_PROBE_PHOTONS, SHARE_PROBE_PATHS);
+        let (map, _, cost) = probe(world, SHARE_PROBE_PHOTONS, SHARE_PROBE_PATHS);
         let share = seen_share(world, &map, settings.global_k);
-        let fraction = (share / FULL_SHARE).clamp(LEAST_FRACTION, 1.0);
+        // Photons where they are dear buy less: variance over cost is least with n ∝ 1/√cost.
+        let paths_per_photon = cost.emitted as f64 / cost.stored.max(1) as f64;
+        let dear = (OPEN_PATHS_PER_PHOTON as f64 / paths_per_photon)
+            .sqrt()
+            .min(1.0);
+        let fraction = (share / FULL_SHARE * dear).clamp(LEAST_FRACTION, 1.0);
         settings.global_photons = (settings.global_photons as f64 * fraction).round() as usize;
         counted.push(("share per mille", (share * 1000.0).round() as u64));
         counted.push(("global photons", settings.global_photons as u64));
