@@ -592,6 +592,28 @@ mod tests {
     }
 
     #[test]
+    fn a_long_list_reads_and_fails_as_a_short_one_does() {
+        let numbers: Vec<String> = (0..2000).map(|i| format!("{i}")).collect();
+        let long = numbers.join(" ");
+        let l = list(&format!(
+            "\"integer indices\" [{long}]\n\"point3 P\" [{long} 0]\n\"float radius\" [{long}]\n\
+             \"integer bad\" [{long} 1.5]\n\"string s\" [{long}]"
+        ))
+        .unwrap();
+        let indices = l.integers("indices").unwrap().unwrap();
+        assert_eq!(indices, (0..2000).collect::<Vec<i64>>());
+        let p = l.vec3s("P").unwrap().unwrap();
+        assert_eq!((p.len(), p[666]), (667, Vec3::new(1998.0, 1999.0, 0.0)));
+        let e = l.float("radius").unwrap_err();
+        assert!(e.message.contains("has 2000 values; expected one"), "{e:?}");
+        let e = l.integers("bad").unwrap_err();
+        assert!(e.message.contains("`1.5` is not an integer"), "{e:?}");
+        assert_eq!((e.line, e.column, e.field.as_str()), (4, 1, "\"integer bad\""));
+        let e = l.strings("s").unwrap_err();
+        assert!(e.message.contains("found a list of 2000 numbers"), "{e:?}");
+    }
+
+    #[test]
     fn malformed_lists_are_errors_with_places() {
         for (text, needle) in [
             (r#""float radius" [1"#, "never closed"),
