@@ -608,7 +608,10 @@ mod tests {
         assert!(e.message.contains("has 2000 values; expected one"), "{e:?}");
         let e = l.integers("bad").unwrap_err();
         assert!(e.message.contains("`1.5` is not an integer"), "{e:?}");
-        assert_eq!((e.line, e.column, e.field.as_str()), (4, 1, "\"integer bad\""));
+        assert_eq!(
+            (e.line, e.column, e.field.as_str()),
+            (4, 1, "\"integer bad\"")
+        );
         let e = l.strings("s").unwrap_err();
         assert!(e.message.contains("found a list of 2000 numbers"), "{e:?}");
     }
