@@ -1,0 +1,225 @@
+//! dpm from Python: `dpm.render` returns the image as a NumPy array, `dpm.check` the
+//! diagnostics as records. Settings are `dpm render`'s flags by their long names, parsed by
+//! the same clap definitions, so Python is refused what the command line is. Renders run with
+//! the GIL released. Must not render differently from the command line: it calls the same
+//! pipeline with the same arguments.
+
+use clap::Parser;
+use dpm::render::args::RenderArgs;
+use dpm::render::pipeline::{self, RenderError};
+use numpy::{PyArray3, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::PathBuf;
+
+pyo3::create_exception!(_dpm, SceneError, pyo3::exceptions::PyException);
+
+/// `dpm render`'s arguments, parsed as the command line parses them.
+#[derive(Parser)]
+#[command(name = "dpm render")]
+struct Cli {
+    #[command(flatten)]
+    args: RenderArgs,
+}
+
+/// The command line for `scene` and the keyword settings: `caustic_photons=200000` becomes
+/// `--caustic-photons 200000`, `True` a bare flag, `False` and `None` nothing.
+fn command_line(scene: &str, settings: &Bound<'_, PyDict>) -> PyResult<Vec<String>> {
+    let mut argv = vec!["dpm render".to_string(), scene.to_string()];
+    for (key, value) in settings.iter() {
+        let flag = format!("--{}", key.extract::<String>()?.replace('_', "-"));
+        if value.is_none() {
+            continue;
+        }
+        if let Ok(on) = value.extract::<bool>() {
+            if on {
+                argv.push(flag);
+            }
+            continue;
+        }
+        argv.push(flag);
+        argv.push(value.str()?.to_string());
+    }
+    Ok(argv)
+}
+
+fn parse(argv: Vec<String>) -> PyResult<RenderArgs> {
+    Cli::try_parse_from(argv)
+        .map(|cli| cli.args)
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+fn to_python(error: RenderError) -> PyErr {
+    match error {
+        RenderError::Scene(e) => {
+            let text = e.to_string();
+            let line = e.line;
+            let column = e.column;
+            let file = e.file.display().to_string();
+            Python::attach(|py| {
+                let err = SceneError::new_err(text);
+                let value = err.value(py);
+                let _ = value.setattr("file", file);
+                let _ = value.setattr("line", line);
+                let _ = value.setattr("column", column);
+                err
+            })
+        }
+        other if other.exit_code() == 2 => PyValueError::new_err(other.to_string()),
+        other => pyo3::exceptions::PyRuntimeError::new_err(other.to_string()),
+    }
+}
+
+/// Renders `scene` and returns its image, linear RGB, as a float32 array of shape (H, W, 3).
+///
+/// Keyword settings are `dpm render`'s flags by their long names with `_` for `-`
+/// (`caustic_photons=200000`, `estimator="cone"`); they are checked as the command line checks
+/// them. The image equals the one `dpm render` writes for the same settings and seed.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)] // Python's keywords, one argument each
+#[pyo3(signature = (scene, *, passes=None, time=None, resolution=None, seed=1, threads=0, **settings))]
+fn render<'py>(
+    py: Python<'py>,
+    scene: PathBuf,
+    passes: Option<u64>,
+    time: Option<f64>,
+    resolution: Option<(u32, u32)>,
+    seed: u64,
+    threads: usize,
+    settings: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let named = PyDict::new(py);
+    named.set_item("passes", passes)?;
+    named.set_item("time", time)?;
+    named.set_item("resolution", resolution.map(|(w, h)| format!("{w}x{h}")))?;
+    named.set_item("seed", seed)?;
+    named.set_item("threads", threads)?;
+    if let Some(settings) = settings {
+        named.update(settings.as_mapping())?;
+    }
+    // The image comes back in memory; the file the pipeline writes goes to a folder that is
+    // removed after.
+    let folder = tempfile_folder()?;
+    named.set_item("output", folder.join("image.pfm").display().to_string())?;
+    let args = parse(command_line(&scene.display().to_string(), &named)?)?;
+    let (outcome, mut stopped) = run_interruptibly(py, &args);
+    let _ = std::fs::remove_dir_all(&folder);
+    let outcome = match (outcome, stopped.take()) {
+        (Ok(outcome), signal) => {
+            stopped = signal;
+            outcome
+        }
+        // Stopped before any pass was complete.
+        (Err(_), Some(signal)) => return Err(signal),
+        (Err(e), None) => return Err(to_python(e)),
+    };
+    let image = array(py, &outcome.image)?;
+    if let Some(signal) = stopped {
+        // Stopped at the end of a pass: the passes completed come with the interrupt.
+        signal.value(py).setattr("image", image)?;
+        signal.value(py).setattr("passes", outcome.passes.len())?;
+        return Err(signal);
+    }
+    Ok(image)
+}
+
+/// Runs the pipeline on another thread with the GIL released, and looks at Python's signals
+/// while it runs: a Ctrl-C asks dpm to stop at the end of the current pass, and comes back as
+/// the `KeyboardInterrupt` to raise once it has.
+fn run_interruptibly(
+    py: Python<'_>,
+    args: &RenderArgs,
+) -> (Result<pipeline::RenderOutcome, RenderError>, Option<PyErr>) {
+    let (done, finished) = std::sync::mpsc::channel();
+    let finished = std::sync::Mutex::new(finished);
+    let mut stopped = None;
+    let outcome = std::thread::scope(|scope| {
+        let worker = scope.spawn(move || {
+            let outcome = pipeline::run(args);
+            let _ = done.send(());
+            outcome
+        });
+        loop {
+            let waited = py.detach(|| finished.lock().unwrap().recv_timeout(SIGNAL_POLL));
+            if !matches!(waited, Err(std::sync::mpsc::RecvTimeoutError::Timeout)) {
+                break;
+            }
+            if stopped.is_none()
+                && let Err(signal) = py.check_signals()
+            {
+                dpm::interrupt::request();
+                stopped = Some(signal);
+            }
+        }
+        worker.join().expect("the render thread does not panic")
+    });
+    dpm::interrupt::reset();
+    (outcome, stopped)
+}
+
+/// How often a render looks at Python's signals (Ctrl-C).
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// An image as a float32 array of shape (H, W, 3).
+fn array<'py>(
+    py: Python<'py>,
+    image: &dpm::image_io::Image,
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let flat: Vec<f32> = image.pixels.iter().flat_map(|p| p.to_array()).collect();
+    numpy::PyArray1::from_vec(py, flat).reshape([image.height, image.width, 3])
+}
+
+/// A fresh folder under the system's temporary folder.
+fn tempfile_folder() -> PyResult<PathBuf> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let name = format!(
+        "dpm-python-{}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Ordering::Relaxed)
+    );
+    let folder = std::env::temp_dir().join(name);
+    std::fs::create_dir_all(&folder)?;
+    Ok(folder)
+}
+
+/// Reads `scene` without rendering; returns its diagnostics as a list of dicts with `file`,
+/// `line`, `column`, `severity` ("error", "warning" or "note") and `message`.
+#[pyfunction]
+fn check<'py>(py: Python<'py>, scene: PathBuf) -> PyResult<Bound<'py, PyList>> {
+    let report = py.detach(|| dpm::scene::check::check(&scene, &Default::default()));
+    let records = PyList::empty(py);
+    for e in &report.errors {
+        let record = PyDict::new(py);
+        record.set_item("file", e.file.display().to_string())?;
+        record.set_item("line", e.line)?;
+        record.set_item("column", e.column)?;
+        record.set_item("severity", "error")?;
+        record.set_item("message", format!("{}: {}", e.field, e.message))?;
+        records.append(record)?;
+    }
+    for (severity, texts) in [
+        ("warning", &report.report.warnings),
+        ("note", &report.report.notes),
+    ] {
+        for text in texts {
+            let record = PyDict::new(py);
+            record.set_item("file", scene.display().to_string())?;
+            record.set_item("line", py.None())?;
+            record.set_item("column", py.None())?;
+            record.set_item("severity", severity)?;
+            record.set_item("message", text)?;
+            records.append(record)?;
+        }
+    }
+    Ok(records)
+}
+
+#[pymodule]
+fn _dpm(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add("SceneError", m.py().get_type::<SceneError>())?;
+    Ok(())
+}
