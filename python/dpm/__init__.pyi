@@ -21,4 +21,17 @@ def render(
     threads: int = 0,
     **settings: Any,
 ) -> npt.NDArray[np.float32]: ...
+class Render:
+    """A render seen pass by pass: iterating yields the image after each pass."""
+
+    def __init__(self, scene: Union[str, PathLike[str]], **settings: Any) -> None:
+        """Starts rendering; ``settings`` are ``render``'s keywords."""
+    def __iter__(self) -> "Render": ...
+    def __next__(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def stats(self) -> Optional[dict[str, Any]]:
+        """The phase table, passes and seconds once the render has ended."""
+    @property
+    def pass_seconds(self) -> list[float]: ...
+
 def check(scene: Union[str, PathLike[str]]) -> list[dict[str, Any]]: ...

@@ -77,32 +77,13 @@ fn to_python(error: RenderError) -> PyErr {
 /// (`caustic_photons=200000`, `estimator="cone"`); they are checked as the command line checks
 /// them. The image equals the one `dpm render` writes for the same settings and seed.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)] // Python's keywords, one argument each
-#[pyo3(signature = (scene, *, passes=None, time=None, resolution=None, seed=1, threads=0, **settings))]
+#[pyo3(signature = (scene, **settings))]
 fn render<'py>(
     py: Python<'py>,
     scene: PathBuf,
-    passes: Option<u64>,
-    time: Option<f64>,
-    resolution: Option<(u32, u32)>,
-    seed: u64,
-    threads: usize,
     settings: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyArray3<f32>>> {
-    let named = PyDict::new(py);
-    named.set_item("passes", passes)?;
-    named.set_item("time", time)?;
-    named.set_item("resolution", resolution.map(|(w, h)| format!("{w}x{h}")))?;
-    named.set_item("seed", seed)?;
-    named.set_item("threads", threads)?;
-    if let Some(settings) = settings {
-        named.update(settings.as_mapping())?;
-    }
-    // The image comes back in memory; the file the pipeline writes goes to a folder that is
-    // removed after.
-    let folder = tempfile_folder()?;
-    named.set_item("output", folder.join("image.pfm").display().to_string())?;
-    let args = parse(command_line(&scene.display().to_string(), &named)?)?;
+    let (args, folder) = render_args(py, &scene, settings)?;
     let (outcome, mut stopped) = run_interruptibly(py, &args);
     let _ = std::fs::remove_dir_all(&folder);
     let outcome = match (outcome, stopped.take()) {
@@ -122,6 +103,32 @@ fn render<'py>(
         return Err(signal);
     }
     Ok(image)
+}
+
+/// `dpm render`'s arguments for `settings` (`resolution=(w, h)` as `--resolution WxH`),
+/// writing its file into a fresh folder: the image comes back in memory, and the caller
+/// removes the folder.
+fn render_args(
+    py: Python<'_>,
+    scene: &std::path::Path,
+    settings: Option<&Bound<'_, PyDict>>,
+) -> PyResult<(RenderArgs, PathBuf)> {
+    let named = match settings {
+        Some(settings) => settings.copy()?,
+        None => PyDict::new(py),
+    };
+    if let Some(size) = named.get_item("resolution")?
+        && let Ok((w, h)) = size.extract::<(u32, u32)>()
+    {
+        named.set_item("resolution", format!("{w}x{h}"))?;
+    }
+    let folder = tempfile_folder()?;
+    named.set_item("output", folder.join("image.pfm").display().to_string())?;
+    let args = command_line(&scene.display().to_string(), &named).and_then(parse);
+    if args.is_err() {
+        let _ = std::fs::remove_dir_all(&folder);
+    }
+    Ok((args?, folder))
 }
 
 /// Runs the pipeline on another thread with the GIL released, and looks at Python's signals
@@ -168,6 +175,136 @@ fn array<'py>(
 ) -> PyResult<Bound<'py, PyArray3<f32>>> {
     let flat: Vec<f32> = image.pixels.iter().flat_map(|p| p.to_array()).collect();
     numpy::PyArray1::from_vec(py, flat).reshape([image.height, image.width, 3])
+}
+
+/// What a render's thread tells the iterator: a pass landed, or the render ended.
+enum Message {
+    Pass(f64, dpm::image_io::Image),
+    Done(Box<Result<pipeline::RenderOutcome, RenderError>>),
+}
+
+/// A render seen pass by pass: iterating it yields the image after each pass (a float32
+/// array (H, W, 3)) while the next one renders; `stats` then holds the phase table.
+#[pyclass(module = "dpm")]
+struct Render {
+    messages: std::sync::Mutex<std::sync::mpsc::Receiver<Message>>,
+    worker: Option<std::thread::JoinHandle<()>>,
+    folder: PathBuf,
+    /// Each pass's seconds so far.
+    #[pyo3(get)]
+    pass_seconds: Vec<f64>,
+    stats: Option<Py<PyDict>>,
+    stopped: Option<PyErr>,
+}
+
+#[pymethods]
+impl Render {
+    /// Starts rendering `scene` (the arguments of [`render`]); iterate to get each pass.
+    #[new]
+    #[pyo3(signature = (scene, **settings))]
+    fn new(py: Python<'_>, scene: PathBuf, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let (args, folder) = render_args(py, &scene, settings)?;
+        let (send, messages) = std::sync::mpsc::channel();
+        let worker = std::thread::spawn(move || {
+            let pass_sender = std::sync::Mutex::new(send.clone());
+            let observer = |record: &pipeline::PassRecord, film: &dpm::render::film::Film| {
+                let message = Message::Pass(record.seconds, film.image());
+                let _ = pass_sender.lock().unwrap().send(message);
+            };
+            let outcome = pipeline::run_observed(&args, Some(&observer));
+            let _ = send.send(Message::Done(Box::new(outcome)));
+        });
+        Ok(Self {
+            messages: std::sync::Mutex::new(messages),
+            worker: Some(worker),
+            folder,
+            pass_seconds: Vec::new(),
+            stats: None,
+            stopped: None,
+        })
+    }
+
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__<'py>(&mut self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray3<f32>>>> {
+        loop {
+            let Some(worker) = &self.worker else {
+                return Ok(None);
+            };
+            let _ = worker;
+            let received = {
+                let messages = &self.messages;
+                py.detach(|| messages.lock().unwrap().recv_timeout(SIGNAL_POLL))
+            };
+            match received {
+                Ok(Message::Pass(seconds, image)) => {
+                    self.pass_seconds.push(seconds);
+                    return array(py, &image).map(Some);
+                }
+                Ok(Message::Done(outcome)) => {
+                    if let Some(worker) = self.worker.take() {
+                        let _ = worker.join();
+                    }
+                    dpm::interrupt::reset();
+                    let _ = std::fs::remove_dir_all(&self.folder);
+                    let stopped = self.stopped.take();
+                    return match (*outcome, stopped) {
+                        (Ok(outcome), stopped) => {
+                            self.stats = Some(stats(py, &outcome)?.unbind());
+                            match stopped {
+                                Some(signal) => Err(signal),
+                                None => Ok(None),
+                            }
+                        }
+                        (Err(_), Some(signal)) => Err(signal),
+                        (Err(e), None) => Err(to_python(e)),
+                    };
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    if self.stopped.is_none()
+                        && let Err(signal) = py.check_signals()
+                    {
+                        dpm::interrupt::request();
+                        self.stopped = Some(signal);
+                    }
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                    self.worker = None;
+                    return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                        "the render thread ended without a result",
+                    ));
+                }
+            }
+        }
+    }
+
+    /// The phase table once the render has ended (`None` before): each phase's seconds and
+    /// counts, the passes and whether Ctrl-C stopped them.
+    #[getter]
+    fn stats(&self, py: Python<'_>) -> Option<Py<PyDict>> {
+        self.stats.as_ref().map(|s| s.clone_ref(py))
+    }
+}
+
+/// A finished render's phase table and passes as a dict.
+fn stats<'py>(py: Python<'py>, outcome: &pipeline::RenderOutcome) -> PyResult<Bound<'py, PyDict>> {
+    let phases = PyDict::new(py);
+    for phase in &outcome.times.phases {
+        let row = PyDict::new(py);
+        row.set_item("seconds", phase.seconds)?;
+        for (name, count) in &phase.counts {
+            row.set_item(name, count)?;
+        }
+        phases.set_item(&phase.name, row)?;
+    }
+    let stats = PyDict::new(py);
+    stats.set_item("phases", phases)?;
+    stats.set_item("passes", outcome.passes.len())?;
+    stats.set_item("seconds", outcome.times.total_seconds())?;
+    stats.set_item("interrupted", outcome.interrupted)?;
+    Ok(stats)
 }
 
 /// A fresh folder under the system's temporary folder.
@@ -220,6 +357,7 @@ fn check<'py>(py: Python<'py>, scene: PathBuf) -> PyResult<Bound<'py, PyList>> {
 fn _dpm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_class::<Render>()?;
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     Ok(())
 }

@@ -101,3 +101,18 @@ def test_ctrl_c_stops_at_the_end_of_a_pass_and_keeps_the_passes_done(tmp_path):
     words = out.split()
     assert words[0] == "interrupted" and int(words[1]) >= 1, out
     assert out.strip().endswith("(24, 32, 3) True"), out
+
+
+def test_a_render_iterated_yields_each_pass_and_ends_on_the_image_render_returns():
+    settings = dict(passes=3, resolution=(32, 24), seed=9, caustic_photons=20000)
+    run = dpm.Render(SCENE, **settings)
+    assert run.stats is None
+    images = list(run)
+    assert len(images) == 3 and len(run.pass_seconds) == 3
+    assert all(i.shape == (24, 32, 3) for i in images)
+    assert not np.array_equal(images[0], images[2])
+    assert np.array_equal(images[-1], dpm.render(SCENE, **settings))
+    stats = run.stats
+    assert stats["passes"] == 3 and not stats["interrupted"]
+    assert stats["phases"]["render"]["seconds"] > 0
+    assert stats["phases"]["trace caustic photons"]["stored"] > 0

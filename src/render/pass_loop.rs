@@ -39,6 +39,8 @@ pub struct PassLoop<'a> {
     pub film_path: Option<PathBuf>,
     /// When the run started: the budget counts from here, loading included.
     pub run_start: Instant,
+    /// Told of every pass as it lands.
+    pub observer: Option<super::pipeline::PassObserver<'a>>,
 }
 
 /// What the loop leaves: the film (None if no pass began one) and the report of the passes.
@@ -142,6 +144,9 @@ impl PassLoop<'_> {
                     .as_ref()
                     .map(|r| image_relative_mse(&film.image(), r)),
             });
+            if let (Some(observer), Some(record)) = (self.observer, out.records.last()) {
+                observer(record, film);
+            }
             out.last_report = Some(report);
             if pass == first && args.time.is_some_and(|t| self.elapsed() > t) {
                 out.budget_note = Some(format!(

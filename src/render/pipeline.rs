@@ -223,10 +223,22 @@ pub fn validate(args: &RenderArgs) -> Result<PathBuf, RenderError> {
 }
 
 pub fn run(args: &RenderArgs) -> Result<RenderOutcome, RenderError> {
+    run_observed(args, None)
+}
+
+/// Called after each pass lands in the film, with the pass's record and the film: how an
+/// embedding program (the Python module) shows a render as it converges.
+pub type PassObserver<'a> = &'a (dyn Fn(&PassRecord, &Film) + Sync);
+
+/// [`run`], calling `observer` after every pass.
+pub fn run_observed(
+    args: &RenderArgs,
+    observer: Option<PassObserver<'_>>,
+) -> Result<RenderOutcome, RenderError> {
     let output = validate(args)?;
     let pool = embree::thread_pool(args.threads)
         .map_err(|e| RenderError::Invalid(format!("--threads {}: {e}", args.threads)))?;
-    pool.install(|| run_in_pool(args, output))
+    pool.install(|| run_in_pool(args, output, observer))
 }
 
 /// The passes asked for: --passes, else one for a photon-map file's single pass, else the
@@ -250,7 +262,11 @@ pub(super) fn pass_limit(args: &RenderArgs) -> u64 {
     }
 }
 
-fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, RenderError> {
+fn run_in_pool(
+    args: &RenderArgs,
+    output: PathBuf,
+    observer: Option<PassObserver<'_>>,
+) -> Result<RenderOutcome, RenderError> {
     embree::enable_flush_to_zero();
     let run_start = Instant::now();
     let mut times = PhaseTimes::new();
@@ -289,6 +305,7 @@ fn run_in_pool(args: &RenderArgs, output: PathBuf) -> Result<RenderOutcome, Rend
         output: &output,
         film_path: args.film.clone().or_else(|| args.resume.clone()),
         run_start,
+        observer,
     };
     let ran = passes.run(start, &mut times)?;
     let film_path = passes.film_path;
