@@ -7,6 +7,6 @@ returns the scene's diagnostics. See
 docs/python.md.
 """
 
-from ._dpm import Render, SceneError, check, render
+from ._dpm import Render, SceneError, check, density, merge, render
 
-__all__ = ["Render", "SceneError", "check", "render"]
+__all__ = ["Render", "SceneError", "check", "density", "merge", "render"]

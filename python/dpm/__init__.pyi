@@ -33,5 +33,18 @@ class Render:
         """The phase table, passes and seconds once the render has ended."""
     @property
     def pass_seconds(self) -> list[float]: ...
+    def save_film(self, path: Union[str, PathLike[str]]) -> None: ...
+
+def merge(
+    films: list[Union[str, PathLike[str]]],
+    *,
+    output: Optional[Union[str, PathLike[str]]] = None,
+    film: Optional[Union[str, PathLike[str]]] = None,
+    expect: Optional[int] = None,
+) -> npt.NDArray[np.float32]: ...
+
+def density(**settings: Any) -> tuple[npt.NDArray[np.float32], dict[str, Any]]:
+    """The paper's density experiment (``dpm density``'s flags as keywords): the estimated
+    density and its report (metrics against the exact density, seconds)."""
 
 def check(scene: Union[str, PathLike[str]]) -> list[dict[str, Any]]: ...

@@ -44,6 +44,14 @@ fn command_line(scene: &str, settings: &Bound<'_, PyDict>) -> PyResult<Vec<Strin
     Ok(argv)
 }
 
+/// `dpm density`'s arguments, parsed as the command line parses them.
+#[derive(Parser)]
+#[command(name = "dpm density")]
+struct DensityCli {
+    #[command(flatten)]
+    args: dpm::density::DensityArgs,
+}
+
 fn parse(argv: Vec<String>) -> PyResult<RenderArgs> {
     Cli::try_parse_from(argv)
         .map(|cli| cli.args)
@@ -195,6 +203,8 @@ struct Render {
     pass_seconds: Vec<f64>,
     stats: Option<Py<PyDict>>,
     stopped: Option<PyErr>,
+    /// The film once the render has ended.
+    film: Option<dpm::render::film::Film>,
 }
 
 #[pymethods]
@@ -221,6 +231,7 @@ impl Render {
             pass_seconds: Vec::new(),
             stats: None,
             stopped: None,
+            film: None,
         })
     }
 
@@ -253,6 +264,7 @@ impl Render {
                     return match (*outcome, stopped) {
                         (Ok(outcome), stopped) => {
                             self.stats = Some(stats(py, &outcome)?.unbind());
+                            self.film = Some(outcome.film);
                             match stopped {
                                 Some(signal) => Err(signal),
                                 None => Ok(None),
@@ -280,12 +292,89 @@ impl Render {
         }
     }
 
+    /// Writes the film (every pass's per-pixel sums, as `dpm render --film` does) once the
+    /// render has ended, for `dpm merge` or `--resume`.
+    fn save_film(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let Some(film) = &self.film else {
+            return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                "the render has not ended: iterate it to the end first",
+            ));
+        };
+        py.detach(|| dpm::render::film_file::write(&path, film))
+            .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
     /// The phase table once the render has ended (`None` before): each phase's seconds and
     /// counts, the passes and whether Ctrl-C stopped them.
     #[getter]
     fn stats(&self, py: Python<'_>) -> Option<Py<PyDict>> {
         self.stats.as_ref().map(|s| s.clone_ref(py))
     }
+}
+
+/// Merges films (from `save_film` or `dpm render --film`) and returns the merged image as
+/// `render` does; `output` and `film` also write the image and the merged film, `expect`
+/// requires passes 0 to N−1, all of them (`dpm merge`'s flags).
+#[pyfunction]
+#[pyo3(signature = (films, *, output=None, film=None, expect=None))]
+fn merge<'py>(
+    py: Python<'py>,
+    films: Vec<PathBuf>,
+    output: Option<PathBuf>,
+    film: Option<PathBuf>,
+    expect: Option<u64>,
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let folder = tempfile_folder()?;
+    let args = dpm::render::merge::MergeArgs {
+        films,
+        output: output.unwrap_or_else(|| folder.join("merged.pfm")),
+        film,
+        expect,
+        exposure: 0.0,
+        kernel_field: None,
+    };
+    let merged = py.detach(|| dpm::render::merge::run(&args));
+    let _ = std::fs::remove_dir_all(&folder);
+    let merged = merged.map_err(|e| PyValueError::new_err(e.to_string()))?;
+    array(py, &merged.film.image())
+}
+
+/// The paper's density experiment (`dpm density`, its flags as keywords: `distribution=`,
+/// `count=`, `estimator=`...): returns the estimated density as a float32 array (H, W, 3) and
+/// the report (`dpm density --stats`: the metrics against the exact density, the seconds) as
+/// a dict.
+#[pyfunction]
+#[pyo3(signature = (**settings))]
+fn density<'py>(
+    py: Python<'py>,
+    settings: Option<&Bound<'py, PyDict>>,
+) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyAny>)> {
+    let named = match settings {
+        Some(settings) => settings.copy()?,
+        None => PyDict::new(py),
+    };
+    let folder = tempfile_folder()?;
+    let output = folder.join("density.pfm");
+    named.set_item("output", output.display().to_string())?;
+    let mut argv = command_line("", &named)?;
+    argv.remove(1); // no scene
+    argv[0] = "dpm density".into();
+    let args = DensityCli::try_parse_from(argv).map(|cli| cli.args);
+    let ran = args
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+        .and_then(|args| {
+            let report = py.detach(|| dpm::density::run(&args));
+            let report = report.map_err(|e| PyValueError::new_err(e.to_string()))?;
+            let image = dpm::image_io::read_image(&output)
+                .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+            let json = serde_json::to_string(&report)
+                .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+            Ok((image, json))
+        });
+    let _ = std::fs::remove_dir_all(&folder);
+    let (image, json) = ran?;
+    let report = py.import("json")?.call_method1("loads", (json,))?;
+    Ok((array(py, &image)?, report))
 }
 
 /// A finished render's phase table and passes as a dict.
@@ -358,6 +447,8 @@ fn _dpm(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
     m.add_class::<Render>()?;
+    m.add_function(wrap_pyfunction!(merge, m)?)?;
+    m.add_function(wrap_pyfunction!(density, m)?)?;
     m.add("SceneError", m.py().get_type::<SceneError>())?;
     Ok(())
 }

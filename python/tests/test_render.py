@@ -116,3 +116,39 @@ def test_a_render_iterated_yields_each_pass_and_ends_on_the_image_render_returns
     assert stats["passes"] == 3 and not stats["interrupted"]
     assert stats["phases"]["render"]["seconds"] > 0
     assert stats["phases"]["trace caustic photons"]["stored"] > 0
+
+
+def test_a_film_saved_from_python_merges_with_one_from_the_command_line(tmp_path):
+    settings = dict(resolution=(32, 24), seed=4, caustic_photons=20000)
+    first = dpm.Render(SCENE, passes=2, **settings)
+    with pytest.raises(RuntimeError, match="has not ended"):
+        first.save_film(tmp_path / "early.film")
+    list(first)
+    first.save_film(tmp_path / "first.film")
+    subprocess.run(
+        [DPM, "render", SCENE, "--first-pass", "2", "--passes", "2", "--film",
+         tmp_path / "second.film", "-o", tmp_path / "second.pfm", "--resolution", "32x24",
+         "--seed", "4", "--caustic-photons", "20000"],
+        check=True, capture_output=True,
+    )
+    merged = dpm.merge([tmp_path / "first.film", tmp_path / "second.film"], expect=4)
+    whole = dpm.render(SCENE, passes=4, **settings)
+    assert np.allclose(merged, whole, rtol=1e-6, atol=0)
+    with pytest.raises(ValueError, match="missing"):
+        dpm.merge([tmp_path / "first.film"], expect=4)
+
+
+def test_the_density_experiment_returns_its_image_and_report(tmp_path):
+    image, report = dpm.density(distribution="constructed", count=20000, width=64, height=48)
+    assert image.shape == (48, 64, 3) and image.dtype == np.float32
+    assert report["photons"] == 20000 and report["width"] == 64
+    assert report["metrics"] is not None
+    out = tmp_path / "cli.pfm"
+    subprocess.run(
+        [DPM, "density", "--distribution", "constructed", "--count", "20000", "--width", "64",
+         "--height", "48", "-o", out],
+        check=True, capture_output=True,
+    )
+    assert np.array_equal(image, read_pfm(out))
+    with pytest.raises(ValueError, match="distribution"):
+        dpm.density(distribution="no-such", count=10)
