@@ -393,6 +393,13 @@ fn stats<'py>(py: Python<'py>, outcome: &pipeline::RenderOutcome) -> PyResult<Bo
     stats.set_item("passes", outcome.passes.len())?;
     stats.set_item("seconds", outcome.times.total_seconds())?;
     stats.set_item("interrupted", outcome.interrupted)?;
+    stats.set_item("caustic_bytes_per_photon", outcome.caustic_bytes_per_photon)?;
+    // The process's, as the command line prints it: this render's unless an earlier one in
+    // the same process peaked higher.
+    stats.set_item(
+        "peak_resident_bytes",
+        dpm::resident_memory::peak_resident_bytes(),
+    )?;
     Ok(stats)
 }
 

@@ -116,6 +116,17 @@ def test_a_render_iterated_yields_each_pass_and_ends_on_the_image_render_returns
     assert stats["passes"] == 3 and not stats["interrupted"]
     assert stats["phases"]["render"]["seconds"] > 0
     assert stats["phases"]["trace caustic photons"]["stored"] > 0
+    assert stats["peak_resident_bytes"] > 0 and stats["caustic_bytes_per_photon"] > 0
+
+
+def test_passes_converge_on_a_long_run():
+    settings = dict(resolution=(32, 24), caustic_photons=20000)
+    reference = dpm.render(SCENE, passes=32, seed=77, **settings)
+    errors = [
+        float(np.mean((image - reference) ** 2))
+        for image in dpm.Render(SCENE, passes=8, seed=3, **settings)
+    ]
+    assert errors[-1] < 0.5 * errors[0], errors
 
 
 def test_a_film_saved_from_python_merges_with_one_from_the_command_line(tmp_path):
