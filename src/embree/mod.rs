@@ -1,7 +1,8 @@
 //! The only door to Embree, and the only code in dpm that touches raw pointers: a thin safe
 //! wrapper that owns the device, error reporting, building an immutable scene from triangle
-//! meshes (copied, or read where their owner holds them: `triangles.rs`), spheres, cubic Bézier curves (`curves.rs`) and instances of other committed scenes
-//! (one level, as pbrt's object instancing allows), hit filters that let a geometry turn down
+//! meshes (copied, or read where their owner holds them: `triangles.rs`), spheres, cubic
+//! Bézier curves (`curves.rs`) and instances of other committed scenes (one level, as pbrt's
+//! object instancing allows), hit filters that let a geometry turn down
 //! hits (alpha cut-outs), single-ray closest-hit and occlusion queries, the Embree version in use,
 //! and the rayon pools (flush-to-zero, a bounded thread count) that trace rays. It runs on one of
 //! two backends, side by side in this folder and chosen at build time: Embree 3 (`embree3.rs` +

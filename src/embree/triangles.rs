@@ -6,7 +6,10 @@
 //! materials or scene files, and must not.
 
 use super::filters::{FilterSlot, HitFilter};
-use super::{EmbreeError, GeometryId, SceneBuilder, backend, new_buffer, shim, sys, wrapper_error};
+use super::{
+    DeviceInner, EmbreeError, GeometryId, SceneBuilder, backend, new_buffer, shim, sys,
+    wrapper_error,
+};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::ffi::c_void;
@@ -67,11 +70,7 @@ impl SceneBuilder {
         check_mesh(positions, triangles)?;
         let device = self.device.clone();
         self.attach(backend::TRIANGLE, |g| {
-            let n = positions.len();
-            let vertices = new_buffer::<[f32; 3]>(&device, g, backend::VERTEX, backend::FLOAT3, n)?;
-            for (dst, p) in vertices.iter_mut().zip(positions) {
-                *dst = p.to_array();
-            }
+            copy_vertices(&device, g, positions)?;
             let count = triangles.len();
             let indices =
                 new_buffer::<[u32; 3]>(&device, g, backend::INDEX, backend::UINT3, count)?;
@@ -102,12 +101,7 @@ impl SceneBuilder {
                 unsafe { share(g, backend::VERTEX, backend::FLOAT3, positions.as_slice()) };
                 device.check()?;
             } else {
-                let n = positions.len();
-                let vertices =
-                    new_buffer::<[f32; 3]>(&device, g, backend::VERTEX, backend::FLOAT3, n)?;
-                for (dst, p) in vertices.iter_mut().zip(positions) {
-                    *dst = p.to_array();
-                }
+                copy_vertices(&device, g, positions)?;
             }
             // SAFETY: as above; every index is below the vertex count (checked).
             unsafe { share(g, backend::INDEX, backend::UINT3, triangles) };
@@ -126,6 +120,20 @@ impl SceneBuilder {
         self.shared.push(mesh);
         Ok(id)
     }
+}
+
+/// Copies `positions` into a vertex buffer Embree owns.
+fn copy_vertices(
+    device: &DeviceInner,
+    geometry: sys::RTCGeometry,
+    positions: &[Vec3],
+) -> Result<(), EmbreeError> {
+    let n = positions.len();
+    let vertices = new_buffer::<[f32; 3]>(device, geometry, backend::VERTEX, backend::FLOAT3, n)?;
+    for (dst, p) in vertices.iter_mut().zip(positions) {
+        *dst = p.to_array();
+    }
+    Ok(())
 }
 
 /// Hands Embree the elements of `items` as buffer `kind`, read where they lie.

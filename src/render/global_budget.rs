@@ -6,8 +6,9 @@
 //! part of the image: a probe map and a grid of camera rays measure its share of the
 //! irradiance the camera sees, and a pass stores photons in proportion to that share (the
 //! full count from [`FULL_SHARE`] on) and to one over the square root of the paths a stored
-//! photon costs past [`OPEN_PATHS_PER_PHOTON`]. Both probes draw from a fixed seed, so every shard of a
-//! render, whatever its seed, decides alike. Owns those decisions; must not shade pixels.
+//! photon costs past [`OPEN_PATHS_PER_PHOTON`]. Both probes draw from a fixed seed, so every
+//! shard of a render, whatever its seed, decides alike. Owns those decisions; must not shade
+//! pixels.
 
 use super::RayCamera;
 use super::args::RenderArgs;
